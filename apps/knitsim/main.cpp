@@ -1,0 +1,21 @@
+// knitsim: yarn-level simulation of knitted cloth. A thin front end over knit::knit;
+// each subcommand lives in its own cmd_*.cpp file.
+#include <exception>
+#include <iostream>
+
+#include "commands.hpp"
+
+int main(int argc, char** argv) {
+  CLI::App app{"knitsim " KNIT_VERSION " — yarn-level simulation of knitted cloth"};
+  app.require_subcommand(1);
+  knitsim::register_simulate(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const std::exception& e) {
+    std::cerr << "knitsim: error: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}

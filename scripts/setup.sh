@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# Installs the Debian packages knitsim needs (only those missing) and builds it in
+# Release into build/. Idempotent and quiet when everything is already there.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+packages=(
+  build-essential cmake ninja-build pkg-config
+  libeigen3-dev libtbb-dev libembree-dev nlohmann-json3-dev libcli11-dev
+  libpng-dev libstb-dev libgtest-dev libgmock-dev libbenchmark-dev
+  ffmpeg gnuplot-nox clang-format
+)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "setup: installing ${missing[*]}"
+  sudo_cmd=()
+  [ "$(id -u)" -eq 0 ] || sudo_cmd=(sudo)
+  "${sudo_cmd[@]}" apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+
+build_dir=${KNIT_BUILD_DIR:-build}
+jobs=${KNIT_JOBS:-$(nproc)}
+if [ ! -f "$build_dir/build.ninja" ]; then
+  cmake -S . -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE=Release ${KNIT_CMAKE_ARGS:-} >/dev/null
+fi
+# ninja prints one line per file; keep the terminal to errors and the final line
+if ! cmake --build "$build_dir" -j "$jobs" >"$build_dir/build.log" 2>&1; then
+  cat "$build_dir/build.log"
+  echo "setup: build failed (log: $build_dir/build.log)" >&2
+  exit 1
+fi

@@ -1,0 +1,139 @@
+#include "knit/model/model.hpp"
+
+#include <stdexcept>
+#include <string>
+
+namespace knit {
+
+bool Model::has_stitches() const {
+  for (const auto& s : stitch)
+    if (s.row >= 0) return true;
+  return false;
+}
+
+double Model::total_length() const {
+  double sum = 0;
+  for (double l : rest_length) sum += l;
+  return sum;
+}
+
+double segment_arclength(const Vector12d& x, const QuadratureTable& quad) {
+  double len = 0;
+  for (int k = 0; k < quad.size(); ++k) len += quad.w[k] * combine(x, quad.db[k]).norm();
+  return len;
+}
+
+int ModelBuilder::add_yarn(const Eigen::Matrix3Xd& control_points) {
+  if (control_points.cols() < 4)
+    throw std::invalid_argument("yarn " + std::to_string(m_yarns.size()) +
+                                ": a cubic B-spline needs at least 4 control points, got " +
+                                std::to_string(control_points.cols()));
+  if (!control_points.allFinite())
+    throw std::invalid_argument("yarn " + std::to_string(m_yarns.size()) +
+                                ": control points must be finite numbers");
+  m_yarns.push_back(control_points);
+  return static_cast<int>(m_yarns.size()) - 1;
+}
+
+int ModelBuilder::num_segments() const {
+  int n = 0;
+  for (const auto& y : m_yarns) n += static_cast<int>(y.cols()) - 3;
+  return n;
+}
+
+int ModelBuilder::segment_index(int yarn, int local) const {
+  if (yarn < 0 || yarn >= num_yarns())
+    throw std::out_of_range("yarn " + std::to_string(yarn) + " does not exist (there are " +
+                            std::to_string(num_yarns()) + ")");
+  const int nseg = static_cast<int>(m_yarns[yarn].cols()) - 3;
+  if (local < 0 || local >= nseg)
+    throw std::out_of_range("segment " + std::to_string(local) + " does not exist on yarn " +
+                            std::to_string(yarn) + " (it has " + std::to_string(nseg) +
+                            " segments)");
+  int base = 0;
+  for (int y = 0; y < yarn; ++y) base += static_cast<int>(m_yarns[y].cols()) - 3;
+  return base + local;
+}
+
+Eigen::VectorXd ModelBuilder::positions() const {
+  int ncp = 0;
+  for (const auto& y : m_yarns) ncp += static_cast<int>(y.cols());
+  Eigen::VectorXd q(3 * ncp);
+  int c = 0;
+  for (const auto& y : m_yarns)
+    for (int k = 0; k < y.cols(); ++k, ++c) q.segment<3>(3 * c) = y.col(k);
+  return q;
+}
+
+Model ModelBuilder::build(const Params& params, double rest_scale) const {
+  if (m_yarns.empty()) throw std::invalid_argument("a model needs at least one yarn");
+  Model m;
+  m.params = params;
+  m.quad = simpson_table(params.quadrature_points);
+  m.contact_quad = midpoint_table(params.contact_points);
+  const Eigen::VectorXd q = positions();
+  int cp = 0, seg = 0;
+  for (int y = 0; y < num_yarns(); ++y) {
+    YarnInfo info;
+    info.cp_begin = cp;
+    info.cp_end = cp + static_cast<int>(m_yarns[y].cols());
+    info.seg_begin = seg;
+    info.seg_end = seg + info.num_cp() - 3;
+    for (int i = 0; i < info.num_seg(); ++i) {
+      m.seg_cp.push_back(cp + i);
+      m.seg_yarn.push_back(y);
+    }
+    m.yarns.push_back(info);
+    cp = info.cp_end;
+    seg = info.seg_end;
+  }
+  // rest lengths and lumped mass M_k = μ Σ_i ℓ_i ∫B_{k−i} (unshrunk lengths: the yarn's
+  // mass does not change when relaxation shrinks its rest length)
+  const double int_b[4] = {1.0 / 24, 11.0 / 24, 11.0 / 24, 1.0 / 24};
+  m.rest_length.resize(seg);
+  m.mass = Eigen::VectorXd::Zero(cp);
+  for (int i = 0; i < seg; ++i) {
+    const double len = segment_arclength(gather_segment(q, m.seg_cp[i]), m.quad);
+    if (!(len > 0))
+      throw std::invalid_argument("segment " + std::to_string(i) +
+                                  " has zero length (its 4 control points coincide)");
+    m.rest_length[i] = rest_scale * len;
+    for (int a = 0; a < 4; ++a) m.mass[m.seg_cp[i] + a] += params.density * len * int_b[a];
+  }
+  m.inv_mass3.resize(3 * cp);
+  for (int k = 0; k < cp; ++k) m.inv_mass3.segment<3>(3 * k).setConstant(1.0 / m.mass[k]);
+  m.stitch = m_stitch;
+  if (m.stitch.empty()) m.stitch.assign(seg, StitchCoord{});
+  if (static_cast<int>(m.stitch.size()) != seg)
+    throw std::invalid_argument("stitch coordinates given for " + std::to_string(m.stitch.size()) +
+                                " segments, the model has " + std::to_string(seg));
+  auto check_point = [&](const YarnPoint& p, const std::string& what) {
+    if (p.segment < 0 || p.segment >= seg)
+      throw std::out_of_range(what + ": segment " + std::to_string(p.segment) +
+                              " does not exist (the model has " + std::to_string(seg) +
+                              " segments)");
+    if (!(p.t >= 0 && p.t <= 1))
+      throw std::out_of_range(what + ": parameter t must lie in [0,1], got " +
+                              std::to_string(p.t));
+  };
+  for (size_t k = 0; k < m_pins.size(); ++k) check_point(m_pins[k].at, "pin " + std::to_string(k));
+  for (size_t k = 0; k < m_glues.size(); ++k) {
+    check_point(m_glues[k].a, "glue " + std::to_string(k));
+    check_point(m_glues[k].b, "glue " + std::to_string(k));
+  }
+  m.pins = m_pins;
+  m.glues = m_glues;
+  return m;
+}
+
+Model scale_rest_lengths(const Model& model, double scale) {
+  Model m = model;
+  for (double& l : m.rest_length) l *= scale;
+  return m;
+}
+
+Eigen::Vector3d point_position(const Model& model, const Eigen::VectorXd& q, const YarnPoint& p) {
+  return combine(gather_segment(q, model.seg_cp[p.segment]), bspline_basis(p.t));
+}
+
+}  // namespace knit

@@ -1,0 +1,117 @@
+#pragma once
+// The immutable Model: topology of the yarns, rest lengths, lumped masses, constraints
+// and quadrature tables. Everything that changes in time lives in State.
+#include <Eigen/Core>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "knit/model/params.hpp"
+#include "knit/spline/basis.hpp"
+
+namespace knit {
+
+/// One yarn: a contiguous range of control points and of segments.
+struct YarnInfo {
+  int cp_begin = 0, cp_end = 0;    ///< global control-point indices [begin, end)
+  int seg_begin = 0, seg_end = 0;  ///< global segment indices [begin, end)
+  int num_cp() const { return cp_end - cp_begin; }
+  int num_seg() const { return seg_end - seg_begin; }
+};
+
+/// A point on a yarn: global segment index and the parameter t ∈ [0,1] in it.
+struct YarnPoint {
+  int segment = 0;
+  double t = 0;
+};
+
+/// Where a segment lies in the knitted fabric (−1 when it is not part of one).
+struct StitchCoord {
+  int row = -1, col = -1;
+};
+
+/// Pin constraint y(s) − p(time) = 0 with p moving linearly with `velocity` between
+/// `start` and `stop` (s), held still before and after.
+struct Pin {
+  YarnPoint at;
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();    ///< p at time ≤ start (cm)
+  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();  ///< cm/s
+  double start = 0;
+  double stop = std::numeric_limits<double>::infinity();
+  Eigen::Vector3d target(double time) const {
+    const double tau = std::clamp(time, start, stop) - start;
+    return origin + velocity * tau;
+  }
+};
+
+/// Glue constraint y(a) − y(b) = 0.
+struct Glue {
+  YarnPoint a, b;
+};
+
+class Model {
+ public:
+  Params params;
+  std::vector<YarnInfo> yarns;
+  std::vector<int> seg_cp;             ///< first control point of each segment
+  std::vector<int> seg_yarn;           ///< yarn of each segment
+  std::vector<double> rest_length;     ///< ℓ_i (cm), already scaled by any shrink factor
+  std::vector<StitchCoord> stitch;     ///< per segment (may be all −1)
+  Eigen::VectorXd mass;                ///< lumped mass per control point (g)
+  Eigen::VectorXd inv_mass3;           ///< 1/m per coordinate (length 3·num_cp)
+  std::vector<Pin> pins;
+  std::vector<Glue> glues;
+  QuadratureTable quad;                ///< energy quadrature (Simpson)
+  QuadratureTable contact_quad;        ///< contact quadrature (midpoint)
+
+  int num_cp() const { return static_cast<int>(mass.size()); }
+  int num_seg() const { return static_cast<int>(seg_cp.size()); }
+  int num_dof() const { return 3 * num_cp(); }
+  bool has_stitches() const;
+  /// true when segments i and j are on the same yarn with |i − j| ≤ 1 (no contact).
+  bool neighbours(int i, int j) const {
+    return seg_yarn[i] == seg_yarn[j] && std::abs(i - j) <= 1;
+  }
+  /// Total yarn rest length (cm).
+  double total_length() const;
+};
+
+/// Builds a Model from control points; rest lengths are the initial arclengths
+/// (measured with the model's own quadrature, so C_i = 0 initially).
+class ModelBuilder {
+ public:
+  /// Adds a yarn (≥ 4 control points, one per column). Returns its index.
+  int add_yarn(const Eigen::Matrix3Xd& control_points);
+  void add_pin(const Pin& pin) { m_pins.push_back(pin); }
+  void add_glue(const Glue& glue) { m_glues.push_back(glue); }
+  /// Stitch coordinates for every segment of every yarn added so far.
+  void set_stitches(std::vector<StitchCoord> stitches) { m_stitch = std::move(stitches); }
+  int num_yarns() const { return static_cast<int>(m_yarns.size()); }
+  int num_segments() const;
+  /// Global segment index of segment `local` of yarn `yarn` (throws if out of range).
+  int segment_index(int yarn, int local) const;
+  /// Control points of all yarns, stacked (3·num_cp).
+  Eigen::VectorXd positions() const;
+  /// Builds the model. Mass uses the unshrunk rest lengths; `rest_scale` (the relaxation
+  /// shrink factor c) multiplies every ℓ_i.
+  Model build(const Params& params, double rest_scale = 1.0) const;
+
+ private:
+  std::vector<Eigen::Matrix3Xd> m_yarns;
+  std::vector<Pin> m_pins;
+  std::vector<Glue> m_glues;
+  std::vector<StitchCoord> m_stitch;
+};
+
+/// Arclength ∫₀¹|y'(t)|dt of one segment with the given quadrature (cm).
+double segment_arclength(const Vector12d& x, const QuadratureTable& quad);
+
+/// A copy of `model` with every rest length multiplied by `scale` (mass unchanged).
+Model scale_rest_lengths(const Model& model, double scale);
+
+/// Position y(s) of a yarn point.
+Eigen::Vector3d point_position(const Model& model, const Eigen::VectorXd& q, const YarnPoint& p);
+
+}  // namespace knit
