@@ -1,4 +1,47 @@
+// knitsim simulate SCENE.json --out DIR
+#include <tbb/global_control.h>
+
+#include <iostream>
+#include <memory>
+
 #include "commands.hpp"
+#include "common.hpp"
+#include "knit/scene/scene.hpp"
+#include "knit/solver/runner.hpp"
+
 namespace knitsim {
-void register_simulate(CLI::App& app) { app.add_subcommand("simulate", "run a scene file"); }
+
+void register_simulate(CLI::App& app) {
+  struct Opts {
+    std::string scene, out;
+    int threads = 0;
+    double duration = -1;
+    bool quiet = false;
+  };
+  auto opts = std::make_shared<Opts>();
+  CLI::App* cmd = app.add_subcommand("simulate", "run a scene file (JSON) and write its states");
+  cmd->add_option("scene", opts->scene, "scene file (JSON)")->required();
+  cmd->add_option("--out,-o", opts->out, "output directory")->required();
+  add_threads_option(cmd, opts->threads);
+  cmd->add_option("--duration", opts->duration, "override the scene's duration (s)");
+  cmd->add_flag("--quiet,-q", opts->quiet, "no progress line");
+  cmd->callback([opts]() {
+    // everything is validated before anything is written
+    knit::Scene scene = knit::load_scene(opts->scene);
+    if (opts->duration >= 0) scene.duration = opts->duration;
+    auto control = make_thread_control(opts->threads);
+    knit::Simulator sim(scene.model);
+    knit::RunOptions run;
+    run.time_step = scene.time_step;
+    run.duration = scene.duration;
+    run.output_every = scene.output_every;
+    run.out_dir = opts->out;
+    run.progress = !opts->quiet;
+    run.extra["scene"] = opts->scene;
+    const knit::RunReport report = knit::run_simulation(sim, scene.state, run);
+    print_report(report, opts->out);
+    if (report.status != knit::StepStatus::OK) throw RunFailed();
+  });
+}
+
 }  // namespace knitsim

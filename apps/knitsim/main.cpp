@@ -4,6 +4,7 @@
 #include <iostream>
 
 #include "commands.hpp"
+#include "common.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{"knitsim " KNIT_VERSION " — yarn-level simulation of knitted cloth"};
@@ -13,6 +14,8 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
+  } catch (const knitsim::RunFailed&) {
+    return 2;
   } catch (const std::exception& e) {
     std::cerr << "knitsim: error: " << e.what() << "\n";
     return 1;

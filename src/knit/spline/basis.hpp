@@ -2,6 +2,7 @@
 // Uniform cubic B-spline basis (MODEL.md §1) and quadrature tables that hold the basis
 // values and derivatives at fixed abscissae, computed once.
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <vector>
 
 namespace knit {

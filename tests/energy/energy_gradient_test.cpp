@@ -1,0 +1,149 @@
+// Finite-difference checks of every energy and damping gradient, per segment kernel and
+// assembled over a yarn, including a straight yarn, a tight bend and coincident points.
+#include <gtest/gtest.h>
+
+#include "fd_check.hpp"
+#include "knit/energy/bending.hpp"
+#include "knit/energy/global_damping.hpp"
+#include "knit/energy/gravity.hpp"
+#include "knit/energy/length.hpp"
+
+namespace knit {
+namespace {
+
+using test::expect_gradient_matches;
+
+Vector12d straight_segment() {
+  Vector12d x;
+  for (int a = 0; a < 4; ++a) x.segment<3>(3 * a) = Eigen::Vector3d(0.3 * a, 0.1 * a, 0);
+  return x;
+}
+
+Vector12d bent_segment() {  // a tight bend: control points on a small circle
+  Vector12d x;
+  for (int a = 0; a < 4; ++a)
+    x.segment<3>(3 * a) = 0.2 * Eigen::Vector3d(std::cos(1.2 * a), std::sin(1.2 * a), 0.1 * a);
+  return x;
+}
+
+Vector12d coincident_segment() {  // control points 1 and 2 coincide
+  Vector12d x = bent_segment();
+  x.segment<3>(6) = x.segment<3>(3);
+  return x;
+}
+
+struct Case {
+  const char* name;
+  Vector12d x;
+};
+
+std::vector<Case> cases() {
+  return {{"straight", straight_segment()},
+          {"bent", bent_segment()},
+          {"coincident", coincident_segment()},
+          {"random", test::jitter(bent_segment(), 0.05, 7)}};
+}
+
+TEST(EnergyKernels, BendingGradientMatchesFiniteDifferences) {
+  const QuadratureTable q = simpson_table(11);
+  for (const Case& c : cases()) {
+    // a straight yarn has zero bending gradient; perturb it off the line to test the kernel
+    const Vector12d x = std::string(c.name) == "straight" ? Vector12d(test::jitter(c.x, 0.02, 3)) : c.x;
+    Vector12d g = Vector12d::Zero();
+    bending_kernel(x, 0.5, 5.0, q, &g);
+    auto f = [&](const Eigen::VectorXd& y) {
+      return bending_kernel(Vector12d(y), 0.5, 5.0, q, nullptr);
+    };
+    expect_gradient_matches(f, x, g, 1e-7, 1e-5, std::string("bending/") + c.name);
+  }
+}
+
+TEST(EnergyKernels, StraightYarnHasZeroBendingEnergyAndForce) {
+  const QuadratureTable q = simpson_table(11);
+  Vector12d g = Vector12d::Zero();
+  EXPECT_NEAR(bending_kernel(straight_segment(), 0.5, 5.0, q, &g), 0.0, 1e-20);
+  EXPECT_LT(g.norm(), 1e-12);
+}
+
+TEST(EnergyKernels, LengthGradientMatchesFiniteDifferences) {
+  const QuadratureTable q = simpson_table(11);
+  for (const Case& c : cases()) {
+    Vector12d g = Vector12d::Zero();
+    length_kernel(c.x, 0.9 * segment_arclength(c.x, q), 2000.0, q, &g);
+    auto f = [&](const Eigen::VectorXd& y) {
+      return length_kernel(Vector12d(y), 0.9 * segment_arclength(c.x, q), 2000.0, q, nullptr);
+    };
+    expect_gradient_matches(f, c.x, g, 1e-7, 1e-6, std::string("length/") + c.name);
+  }
+}
+
+TEST(EnergyKernels, GlobalDampingGradientMatchesFiniteDifferences) {
+  const Vector12d u = test::jitter(Vector12d::Zero(), 3.0, 11);
+  Vector12d g = Vector12d::Zero();
+  global_damping_kernel(u, 1.5, &g);
+  auto f = [&](const Eigen::VectorXd& y) { return global_damping_kernel(Vector12d(y), 1.5, nullptr); };
+  expect_gradient_matches(f, u, g, 1e-6, 1e-8, "global_damping");
+}
+
+// assembled terms over a small yarn: force = −∇E
+Model wavy_yarn(Eigen::VectorXd& q) {
+  Eigen::Matrix3Xd cp(3, 12);
+  for (int k = 0; k < 12; ++k)
+    cp.col(k) = Eigen::Vector3d(0.3 * k, 0.2 * std::sin(0.9 * k), 0.1 * std::cos(1.3 * k));
+  ModelBuilder b;
+  b.add_yarn(cp);
+  b.add_yarn(cp.colwise() + Eigen::Vector3d(0, 1, 0));
+  q = b.positions();
+  return b.build(Params{}, 0.95);
+}
+
+template <class T>
+void check_assembled(const char* name) {
+  Eigen::VectorXd q;
+  const Model m = wavy_yarn(q);
+  q = test::jitter(q, 0.02, 5);
+  T term;
+  Eigen::VectorXd f = Eigen::VectorXd::Zero(q.size());
+  const Eigen::VectorXd v = Eigen::VectorXd::Zero(q.size());
+  term.add_force(m, q, v, f);
+  auto e = [&](const Eigen::VectorXd& y) {
+    Eigen::VectorXd tmp = Eigen::VectorXd::Zero(y.size());
+    return term.add_force(m, y, v, tmp);
+  };
+  expect_gradient_matches(e, q, -f, 1e-7, 1e-5, name);
+  // energy() agrees with add_force's return value
+  Eigen::VectorXd tmp = Eigen::VectorXd::Zero(q.size());
+  EXPECT_NEAR(term.energy(m, q), term.add_force(m, q, v, tmp), 1e-9 * (1 + std::abs(e(q))));
+}
+
+TEST(AssembledEnergies, BendingForceIsMinusGradient) { check_assembled<BendingEnergy>("bending"); }
+TEST(AssembledEnergies, LengthForceIsMinusGradient) { check_assembled<LengthEnergy>("length"); }
+TEST(AssembledEnergies, GravityForceIsMinusGradient) { check_assembled<Gravity>("gravity"); }
+
+TEST(AssembledEnergies, GlobalDampingForceIsMinusVelocityGradientAndDissipates) {
+  Eigen::VectorXd q;
+  Model m = wavy_yarn(q);
+  m.params.k_global = 1.5;
+  const Eigen::VectorXd v = test::jitter(Eigen::VectorXd::Zero(q.size()), 4.0, 9);
+  GlobalDamping term;
+  Eigen::VectorXd f = Eigen::VectorXd::Zero(q.size());
+  term.add_force(m, q, v, f);
+  auto d = [&](const Eigen::VectorXd& u) {
+    double sum = 0;
+    for (int i = 0; i < m.num_seg(); ++i)
+      sum += global_damping_kernel(gather_segment(u, m.seg_cp[i]), 1.5, nullptr);
+    return sum;
+  };
+  expect_gradient_matches(d, v, -f, 1e-6, 1e-7, "global_damping assembled");
+  EXPECT_LT(f.dot(v), 0.0) << "damping must remove energy";
+  // mass-proportional: every control point's velocity decays at the same rate 2k/(μ ℓ)
+  for (int k = 0; k < m.num_cp(); ++k) {
+    const Eigen::Vector3d rate = -f.segment<3>(3 * k).cwiseQuotient(v.segment<3>(3 * k)) / m.mass[k];
+    const double expected = 2 * 1.5 / (m.params.density * m.rest_length[0] / 0.95);
+    EXPECT_NEAR(rate.maxCoeff(), rate.minCoeff(), 1e-9 * expected) << "control point " << k;
+    EXPECT_NEAR(rate[0], expected, 0.2 * expected) << "control point " << k;
+  }
+}
+
+}  // namespace
+}  // namespace knit
