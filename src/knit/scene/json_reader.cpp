@@ -117,6 +117,8 @@ nlohmann::json parse_json_file(const std::string& path) {
     }
     throw InputError(path + ":" + std::to_string(line) + ":" + std::to_string(col) +
                      ": malformed JSON: " + e.what());
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(path + ": malformed JSON: " + e.what());
   }
 }
 

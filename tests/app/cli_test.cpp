@@ -1,0 +1,84 @@
+// The knitsim program end to end: exit codes, messages, and that nothing is written when
+// a scene is rejected.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Result {
+  int code;
+  std::string output;
+};
+
+Result run(const std::string& args) {
+  const std::string cmd = std::string(KNIT_APP) + " " + args + " 2>&1";
+  FILE* pipe = popen(cmd.c_str(), "r");
+  std::string out;
+  std::array<char, 4096> buf;
+  while (size_t n = fread(buf.data(), 1, buf.size(), pipe)) out.append(buf.data(), n);
+  const int status = pclose(pipe);
+  return {WEXITSTATUS(status), out};
+}
+
+std::string temp_dir(const std::string& name) {
+  const fs::path p = fs::path(::testing::TempDir()) / name;
+  fs::remove_all(p);
+  return p.string();
+}
+
+TEST(Cli, RejectedSceneWritesNothing) {
+  const std::string scene = ::testing::TempDir() + "/cli_bad.json";
+  std::ofstream(scene) << R"({"yarns": [{"line": {"from": [0,0,0], "to": [1,0,0], "segments": 4}}],
+                              "pins": [{"yarn": 2, "at": "start"}]})";
+  const std::string out = temp_dir("cli_bad_out");
+  const Result r = run("simulate " + scene + " --out " + out);
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.output.find("pins[0].yarn"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(out)) << "output directory created for a rejected scene";
+}
+
+TEST(Cli, PendulumExampleRunsAndSummarises) {
+  const std::string out = temp_dir("cli_pendulum");
+  const Result r = run(std::string("simulate ") + KNIT_EXAMPLES + "/pendulum.json --out " + out +
+                       " --duration 0.05 --quiet");
+  ASSERT_EQ(r.code, 0) << r.output;
+  std::ifstream in(out + "/summary.json");
+  const auto s = nlohmann::json::parse(in);
+  for (const char* key : {"status", "steps", "sim_time_s", "wall_time_s", "threads", "yarns", "segments",
+                          "control_points", "max_length_violation", "kinetic_energy", "potential_energy"})
+    EXPECT_TRUE(s.contains(key)) << key;
+  EXPECT_EQ(s["status"], "ok");
+  EXPECT_EQ(s["steps"], 500);
+  EXPECT_LT(s["max_length_violation"].get<double>(), 1e-6);
+  EXPECT_TRUE(fs::exists(out + "/final.kstate"));
+  EXPECT_TRUE(fs::exists(out + "/log.csv"));
+  EXPECT_TRUE(fs::exists(out + "/frames/state_000005.kstate"));
+}
+
+TEST(Cli, UnstableRunStopsWithStatusAndKeepsLastGoodState) {
+  const std::string scene = ::testing::TempDir() + "/cli_unstable.json";
+  std::ofstream(scene) << R"({"yarns": [{"line": {"from": [0,0,0], "to": [5,0,0], "segments": 10}}],
+                              "params": {"k_bend": 1e7}, "time_step": 0.01, "duration": 1})";
+  const std::string out = temp_dir("cli_unstable_out");
+  const Result r = run("simulate " + scene + " --out " + out + " --quiet");
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("smaller time step"), std::string::npos) << r.output;
+  std::ifstream in(out + "/summary.json");
+  const auto s = nlohmann::json::parse(in);
+  EXPECT_NE(s["status"], "ok");
+  EXPECT_TRUE(fs::exists(out + "/last_good.kstate"));
+}
+
+TEST(Cli, UnknownOptionFails) {
+  const Result r = run("simulate --bogus");
+  EXPECT_NE(r.code, 0);
+}
+
+}  // namespace

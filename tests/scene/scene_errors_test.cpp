@@ -1,0 +1,114 @@
+// Every kind of bad scene input is rejected with a message naming the file, the field and
+// what was expected.
+#include <gtest/gtest.h>
+
+#include "knit/scene/scene.hpp"
+
+#include <fstream>
+
+namespace knit {
+namespace {
+
+std::string error_of(const std::string& text) {
+  try {
+    parse_scene(nlohmann::json::parse(text), "scene.json");
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return "";
+}
+
+void expect_error(const std::string& text, std::initializer_list<const char*> needles) {
+  const std::string msg = error_of(text);
+  ASSERT_FALSE(msg.empty()) << "accepted: " << text;
+  EXPECT_NE(msg.find("scene.json"), std::string::npos) << msg;
+  for (const char* n : needles) EXPECT_NE(msg.find(n), std::string::npos) << "'" << n << "' not in: " << msg;
+}
+
+const char* LINE = R"({"line": {"from": [0,0,0], "to": [4,0,0], "segments": 8}})";
+
+std::string scene_with(const std::string& extra) {
+  return std::string(R"({"yarns": [)") + LINE + "]" + extra + "}";
+}
+
+TEST(SceneErrors, ValidSceneParses) {
+  const Scene s = parse_scene(nlohmann::json::parse(scene_with(R"(, "pins": [{"yarn": 0, "at": "start"}])")), "scene.json");
+  EXPECT_EQ(s.model.num_seg(), 8);
+  EXPECT_EQ(s.model.pins.size(), 1u);
+  EXPECT_NEAR((point_position(s.model, s.state.q, {0, 0.0}) - Eigen::Vector3d::Zero()).norm(), 0, 1e-12);
+  EXPECT_NEAR((point_position(s.model, s.state.q, {7, 1.0}) - Eigen::Vector3d(4, 0, 0)).norm(), 0, 1e-12);
+}
+
+TEST(SceneErrors, UnknownKeysAreNamed) {
+  expect_error(scene_with(R"(, "gravty": [0,0,-981])"), {"gravty", "unknown key"});
+  expect_error(scene_with(R"(, "params": {"k_bnd": 5})"), {"params.k_bnd", "unknown key"});
+  expect_error(R"({"yarns": [{"line": {"from": [0,0,0], "to": [1,0,0], "segments": 4, "colour": 1}}]})",
+               {"yarns[0].line.colour"});
+}
+
+TEST(SceneErrors, MissingFieldsAreNamed) {
+  expect_error(R"({"time_step": 0.001})", {"yarns", "missing"});
+  expect_error(R"({"yarns": [{"line": {"from": [0,0,0], "segments": 4}}]})", {"yarns[0].line.to", "missing"});
+  expect_error(scene_with(R"(, "pins": [{"at": "start"}])"), {"pins[0].yarn", "missing"});
+}
+
+TEST(SceneErrors, NegativeOrNonFiniteParametersAreRejected) {
+  expect_error(scene_with(R"(, "params": {"k_bend": -1})"), {"params.k_bend", "non-negative"});
+  expect_error(scene_with(R"(, "params": {"radius": 0})"), {"params.radius", "positive"});
+  expect_error(scene_with(R"(, "time_step": -0.001)"), {"time_step", "positive"});
+  expect_error(scene_with(R"(, "params": {"alpha_small": 1.5})"), {"params.alpha_small", "[0, 1]"});
+  expect_error(scene_with(R"(, "params": {"k_len": "stiff"})"), {"params.k_len", "number"});
+  expect_error(scene_with(R"(, "params": {"quadrature_points": 10})"), {"quadrature_points", "odd"});
+  // JSON text has no NaN literal, but a document built in code can hold one
+  nlohmann::json doc = nlohmann::json::parse(scene_with(""));
+  doc["params"]["k_len"] = std::nan("");
+  try {
+    parse_scene(doc, "scene.json");
+    FAIL() << "accepted NaN";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("params.k_len"), std::string::npos) << e.what();
+  }
+}
+
+TEST(SceneErrors, PinsAndGlueMustReferToExistingYarnsAndSegments) {
+  expect_error(scene_with(R"(, "pins": [{"yarn": 3, "at": "start"}])"), {"pins[0].yarn", "yarn 3 does not exist"});
+  expect_error(scene_with(R"(, "pins": [{"yarn": 0, "segment": 8, "t": 0.5}])"), {"pins[0].segment", "segment 8 does not exist", "8 segments"});
+  expect_error(scene_with(R"(, "pins": [{"yarn": 0, "segment": 2, "t": 1.5}])"), {"pins[0].t", "[0, 1]"});
+  expect_error(scene_with(R"(, "pins": [{"yarn": 0, "at": "middle"}])"), {"pins[0].at", "\"start\" or \"end\""});
+  expect_error(scene_with(R"(, "glue": [{"a": {"yarn": 0, "segment": 1}, "b": {"yarn": 1, "segment": 0}}])"),
+               {"glue[0].b.yarn", "does not exist"});
+}
+
+TEST(SceneErrors, TooFewControlPoints) {
+  expect_error(R"({"yarns": [{"points": [[0,0,0],[1,0,0],[2,0,0]]}]})", {"yarns[0].points", "at least 4 control points", "got 3"});
+  expect_error(R"({"yarns": []})", {"yarns", "at least 1"});
+  expect_error(R"({"yarns": [{"points": [[0,0,0],[1,0,0],[2,0],[3,0,0]]}]})", {"yarns[0].points[2]", "3 numbers"});
+}
+
+TEST(SceneErrors, MalformedJsonNamesLineAndColumn) {
+  const std::string path = ::testing::TempDir() + "/bad_scene.json";
+  {
+    std::ofstream out(path);
+    out << "{\n  \"yarns\": [\n    {\"line\": {\"from\": [0,0,0] \"to\": [1,0,0]}}\n  ]\n}\n";
+  }
+  try {
+    load_scene(path);
+    FAIL() << "accepted malformed JSON";
+  } catch (const InputError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find(path + ":3:"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("malformed JSON"), std::string::npos) << msg;
+  }
+  EXPECT_THROW(load_scene(::testing::TempDir() + "/does_not_exist.json"), InputError);
+  // a number too large for a double is a clear error too
+  std::ofstream(path) << R"({"yarns": [], "time_step": 1e999})";
+  try {
+    load_scene(path);
+    FAIL() << "accepted 1e999";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace knit
