@@ -1,0 +1,40 @@
+#pragma once
+// Measures of a knitted sample's shape, computed from the yarn and the stitch
+// coordinates of its segments (MODEL.md §6: stockinette curls, rib draws in across,
+// garter draws in along the wale).
+//
+// Frame: stitch centroids of the central half of the sample (rows and columns between
+// the quartiles) define a best-fit plane; the course axis is the mean direction from
+// column to column along the rows, the wale axis the mean direction from row to row, both
+// projected into that plane; the normal is course × wale (the fabric's front).
+#include <Eigen/Core>
+#include <nlohmann/json.hpp>
+
+#include "knit/model/model.hpp"
+
+namespace knit {
+
+struct FabricShape {
+  int rows = 0, cols = 0;
+  double course_extent_cm = 0;  ///< extent of the yarn along the course axis (width)
+  double wale_extent_cm = 0;    ///< extent along the wale axis (height)
+  double thickness_cm = 0;      ///< extent along the normal over the central half, + 2r
+  double stitch_width_cm = 0;   ///< mean centroid spacing of adjacent columns, central half
+  double row_height_cm = 0;     ///< mean centroid spacing of adjacent rows, central half
+  double loop_length_cm = 0;    ///< rest yarn length per stitch
+  /// Signed mean offset (cm) of each edge's stitch centroids from the central plane,
+  /// positive toward the front: left (column 0), right, bottom (row 0), top.
+  double edge_offset_cm[4] = {0, 0, 0, 0};
+  /// Mean |edge offset| over the four edges divided by the stitch width: 0 for a flat
+  /// sheet; about 1 when the edges have rolled one stitch width out of the plane.
+  double edge_curl = 0;
+  Eigen::Vector3d course_axis, wale_axis, normal;
+};
+
+/// Measures the sample; throws if the model has no stitch coordinates or fewer than 2
+/// rows or columns.
+FabricShape measure_fabric(const Model& model, const Eigen::VectorXd& q);
+
+nlohmann::json to_json(const FabricShape& shape);
+
+}  // namespace knit
