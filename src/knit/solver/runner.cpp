@@ -161,6 +161,7 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
       report.steps > 0 ? 1e6 * wall / (static_cast<double>(report.steps) * model.num_seg()) : 0.0;
   s["frames_written"] = opt.write_frames ? frame : 0;
   for (const auto& [key, value] : opt.extra.items()) s[key] = value;
+  if (opt.on_finish) opt.on_finish(sim, state, s);
   write_file_atomic((dir / "summary.json").string(), s.dump(2) + "\n");
   report.summary = s;
   return report;

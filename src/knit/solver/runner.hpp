@@ -25,6 +25,9 @@ struct RunOptions {
   /// Optional early stop, checked at every output step: return true to end the run (ok).
   std::function<bool(Simulator&, const State&)> stop_when;
   nlohmann::json extra = nlohmann::json::object();  ///< merged into summary.json
+  /// Optional: called with the final state and the summary before it is written, to add
+  /// fields (shape measures, …).
+  std::function<void(Simulator&, const State&, nlohmann::json&)> on_finish;
 };
 
 struct RunReport {

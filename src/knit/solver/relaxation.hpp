@@ -1,0 +1,33 @@
+#pragma once
+// Relaxation to rest (MODEL.md §6): simulate with the relaxation parameters (length
+// constraints off, stiff length energy, strong global damping, rest lengths shrunk by c)
+// until the kinetic energy per unit length of yarn falls below a threshold or a time
+// limit passes.
+#include <string>
+
+#include "knit/solver/runner.hpp"
+
+namespace knit {
+
+struct RelaxOptions {
+  double time_step = 1.0 / 11800;    ///< s
+  double max_time = 2.0;             ///< s of simulated time at most
+  double ke_per_length = 1e-5;       ///< erg/cm: rest when ½ vᵀMv / L falls below
+  int check_every = 200;             ///< steps between rest checks (and written states)
+  std::string out_dir;
+  bool progress = true;
+  bool write_frames = true;
+};
+
+/// The shrink factor c of MODEL.md §6.
+inline constexpr double RELAX_SHRINK = 0.935;
+
+/// Relaxes `state` in place with `sim` (whose model carries the relaxation parameters and
+/// shrunk rest lengths). The summary gains `relaxed` (bool: the threshold was reached),
+/// `ke_per_length_threshold` and `ke_per_length` (erg/cm).
+/// `on_finish` (optional) adds further fields to the summary.
+RunReport relax(Simulator& sim, State& state, const RelaxOptions& options,
+                nlohmann::json extra = nlohmann::json::object(),
+                std::function<void(Simulator&, const State&, nlohmann::json&)> on_finish = {});
+
+}  // namespace knit
