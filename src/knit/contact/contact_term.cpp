@@ -107,8 +107,8 @@ void ContactTerm::pair_kernel(const Model& model, int i, int j, RowStats& row) {
   const Params& prm = model.params;
   const QuadratureTable& quad = model.contact_quad;
   const double r = prm.radius;
-  const double inv_two_r = 0.5 / r;
   const double four_r2 = 4.0 * r * r;
+  const double inv_four_r2 = 1.0 / four_r2;
   const size_t bi = static_cast<size_t>(i) * P, bj = static_cast<size_t>(j) * P;
 
   const Aabb near_j = m_boxes[j].grown(r);
@@ -159,16 +159,15 @@ void ContactTerm::pair_kernel(const Model& model, int i, int j, RowStats& row) {
       ++contacts;
       min_d2 = std::min(min_d2, d2);
       const double ww = wa * quad.w[b];
-      const double dist = std::sqrt(d2);
-      const double d = dist * inv_two_r;
-      const double dd = d * d;
-      energy += kl * ww * (1.0 / dd + dd - 2.0);
-      const double fprime = -2.0 / (dd * d) + 2.0 * d;
-      // force on y_j(t_b): −∂E/∂y_j = −k ℓℓ ww f'(d)/(2r) · Δy/|Δy|
-      const double s = -kl * ww * fprime * inv_two_r / dist;
+      // d = |Δy|/2r, f = 1/d² + d² − 2, f' = −2/d³ + 2d; the force on y_j(t_b),
+      // −∂E/∂y_j = −k ℓℓ ww f'(d)/(2r) Δy/|Δy| = −k ℓℓ ww (2/4r²)(1 − 1/d⁴) Δy
+      const double dd = d2 * inv_four_r2;
+      const double inv_dd = four_r2 / d2;
+      energy += kl * ww * (inv_dd + dd - 2.0);
+      const double s = -kl * ww * 2.0 * inv_four_r2 * (1.0 - inv_dd * inv_dd);
       double fx = s * dx, fy = s * dy, fz = s * dz;
       if (damp) {
-        const double inv = 1.0 / dist;
+        const double inv = 1.0 / std::sqrt(d2);
         const double nx = dx * inv, ny = dy * inv, nz = dz * inv;
         const double dvx = m_vx[bj + b] - m_vx[bi + a];
         const double dvy = m_vy[bj + b] - m_vy[bi + a];
