@@ -1,0 +1,139 @@
+#pragma once
+// Yarn–yarn contact assembled over the whole model (MODEL.md §3 contact energy, §4 contact
+// damping, §7 culling; Kaldor, James & Marschner 2008, §4.2, §4.3 and §5.4). The pair
+// formulas, units and the damping convention are in contact_kernel.hpp.
+//
+// Pairs: every pair of segments that are not Model::neighbours (same yarn, |i − j| ≤ 1);
+// across yarns every pair. Each pair is evaluated once (i < j).
+//
+// Culling (ContactCulling::BVH). Each evaluation:
+//   1. points: every segment's contact quadrature points y_i(t_a) and velocities v_i(t_a)
+//      are tabulated, and the segment's box is the box of its points grown by r;
+//   2. refit: a BVH over the segment boxes, built once (first evaluation) and refit after;
+//   3. traverse: every segment queries the tree with its own box (in parallel) and keeps
+//      the overlapping non-neighbour segments, sorted — the candidate segment pairs;
+//   4. kernel: for each candidate pair (i < j), only the points of i inside box_j grown by
+//      r (and of j inside box_i grown by r) can be within 2r of the other segment; those
+//      point pairs are tested densely and the pair's forces are stored if any is in contact;
+//   5. gather: every segment sums its pair forces in a fixed order, then every control
+//      point sums its ≤ 4 segments (SegmentAccumulator).
+// No step accumulates across threads, so the result is bitwise independent of the thread
+// count. Buffers are kept between evaluations, so the steady state does not allocate.
+// ContactCulling::BRUTE_FORCE visits all pairs serially with the plain dense kernel: the
+// test oracle, O(N²).
+#include <Eigen/Core>
+#include <limits>
+#include <string_view>
+#include <vector>
+
+#include "knit/contact/bvh.hpp"
+#include "knit/energy/segment_accumulator.hpp"
+#include "knit/energy/term.hpp"
+
+namespace knit {
+
+enum class ContactCulling { BVH, BRUTE_FORCE };
+
+/// What the last evaluation visited.
+struct ContactStats {
+  /// segment pairs whose point kernels were run (BVH: non-neighbour pairs i < j whose
+  /// boxes overlap; brute force: every non-neighbour pair)
+  long long candidate_segment_pairs = 0;
+  /// point pairs whose distance was computed
+  long long point_pairs_tested = 0;
+  /// point pairs with d = |Δy|/2r < 1 (they contribute energy and force)
+  long long point_pairs_in_contact = 0;
+  /// smallest d over non-neighbouring point pairs; +inf when no pair is within the
+  /// culling radius d < 1 (it does not depend on the culling method)
+  double min_distance_ratio = std::numeric_limits<double>::infinity();
+  /// BVH node boxes tested during the traversal (0 for brute force)
+  long long box_tests = 0;
+};
+
+/// Wall-clock seconds of the stages of the last evaluation.
+struct ContactTimings {
+  double build = 0;     ///< BVH build (only on the first evaluation, else 0)
+  double points = 0;    ///< tabulating points, velocities and segment boxes
+  double refit = 0;     ///< BVH refit
+  double traverse = 0;  ///< candidate segment pairs
+  double kernel = 0;    ///< point-pair kernels
+  double gather = 0;    ///< per-segment and per-control-point reduction
+  double total = 0;
+};
+
+/// One contact quadrature point pair in contact: point a of segment i, point b of j, i < j.
+struct ContactPointPair {
+  int seg_i = 0, point_a = 0, seg_j = 0, point_b = 0;
+  auto operator<=>(const ContactPointPair&) const = default;
+};
+
+/// Yarn–yarn contact energy and contact damping as a Term.
+class ContactTerm : public Term {
+ public:
+  /// Largest supported Params::contact_points.
+  static constexpr int MAX_CONTACT_POINTS = 64;
+
+  /// Sizes the buffers for `model` (the BVH is built on the first evaluation). Throws
+  /// std::invalid_argument if model.params.contact_points exceeds MAX_CONTACT_POINTS.
+  explicit ContactTerm(const Model& model, ContactCulling culling = ContactCulling::BVH);
+
+  std::string_view name() const override { return "contact"; }
+
+  /// Adds the contact force −∂E/∂q and the contact damping force −∂D/∂q̇ (dyn) into
+  /// `force` and returns the contact energy E (erg). A model with a different number of
+  /// segments than the last call gets a fresh BVH.
+  double add_force(const Model& model, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
+                   Eigen::VectorXd& force) override;
+
+  ContactCulling culling() const { return m_culling; }
+  /// Counts of the last evaluation.
+  const ContactStats& last_stats() const { return m_stats; }
+  /// Stage timings of the last evaluation.
+  const ContactTimings& last_timings() const { return m_timings; }
+
+  /// When on, each evaluation records its point pairs in contact (slow; for tests).
+  void set_record_point_pairs(bool on) { m_record = on; }
+  /// The point pairs in contact of the last evaluation with recording on, sorted.
+  const std::vector<ContactPointPair>& last_point_pairs() const { return m_point_pairs; }
+
+ private:
+  // forces of one segment pair (i < j) that has at least one point pair in contact
+  struct PairForce {
+    int j = 0;
+    Vector12d force_i, force_j;
+  };
+  // per-segment (row) outputs of the kernel stage
+  struct RowStats {
+    double energy = 0;
+    long long candidates = 0, tested = 0, contacts = 0, box_tests = 0;
+    double min_d2 = std::numeric_limits<double>::infinity();  // squared distance (cm²)
+  };
+
+  void resize(const Model& model);
+  void tabulate_points(const Model& model, const Eigen::VectorXd& q, const Eigen::VectorXd& v);
+  void pair_kernel(const Model& model, int i, int j, RowStats& row);
+  double add_force_bvh(const Model& model, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
+                       Eigen::VectorXd& force);
+  double add_force_brute(const Model& model, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
+                         Eigen::VectorXd& force);
+
+  ContactCulling m_culling;
+  int m_num_seg = 0;
+  int m_points = 0;
+  bool m_has_velocity = false;
+  bool m_record = false;
+  // contact points and velocities, structure of arrays, index segment·P + a
+  std::vector<double> m_px, m_py, m_pz, m_vx, m_vy, m_vz;
+  std::vector<Aabb> m_boxes;
+  Bvh m_bvh;
+  std::vector<std::vector<int>> m_partners;     // per segment: candidates, sorted
+  std::vector<std::vector<PairForce>> m_pairs;  // per segment i: pairs (i, j > i) in contact
+  std::vector<RowStats> m_rows;
+  std::vector<std::vector<ContactPointPair>> m_row_records;
+  std::vector<ContactPointPair> m_point_pairs;
+  SegmentAccumulator m_accumulator;
+  ContactStats m_stats;
+  ContactTimings m_timings;
+};
+
+}  // namespace knit

@@ -1,0 +1,305 @@
+// ContactTerm: assembled derivatives, BVH against brute force, determinism, conservation
+// laws and a push test.
+#include "knit/contact/contact_term.hpp"
+
+#include <gtest/gtest.h>
+
+#include <tbb/global_control.h>
+#include <Eigen/Geometry>
+
+#include <cmath>
+#include <random>
+#include <string>
+
+#include "knit/contact/contact_kernel.hpp"
+#include "knit/contact/contact_samples.hpp"
+
+namespace knit {
+namespace {
+
+// largest |entry| (a plain loop: GCC 12 warns falsely inside Eigen's AVX-512 max reduction)
+template <class V>
+double max_abs(const V& v) {
+  double m = 0;
+  for (Eigen::Index k = 0; k < v.size(); ++k) m = std::max(m, std::abs(v[k]));
+  return m;
+}
+
+struct Sample {
+  Model model;
+  Eigen::VectorXd q;
+};
+
+Sample make(const ModelBuilder& builder, const Params& params = Params{}) {
+  return {builder.build(params), builder.positions()};
+}
+
+Eigen::VectorXd random_vector(int n, double sigma, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> normal(0.0, sigma);
+  Eigen::VectorXd v(n);
+  for (int k = 0; k < n; ++k) v[k] = normal(rng);
+  return v;
+}
+
+Eigen::VectorXd force_of(ContactTerm& term, const Sample& s, const Eigen::VectorXd& v,
+                         double* energy = nullptr) {
+  Eigen::VectorXd f = Eigen::VectorXd::Zero(s.q.size());
+  const double e = term.add_force(s.model, s.q, v, f);
+  if (energy) *energy = e;
+  return f;
+}
+
+// total contact damping D over all non-neighbour pairs, from the plain kernel
+double total_damping(const Model& m, const Eigen::VectorXd& q, const Eigen::VectorXd& v) {
+  double d = 0;
+  for (int i = 0; i < m.num_seg(); ++i)
+    for (int j = i + 1; j < m.num_seg(); ++j) {
+      if (m.neighbours(i, j)) continue;
+      d += contact_pair_damping(gather_segment(q, m.seg_cp[i]), gather_segment(q, m.seg_cp[j]),
+                                gather_segment(v, m.seg_cp[i]), gather_segment(v, m.seg_cp[j]),
+                                m.rest_length[i], m.rest_length[j], m.params, m.contact_quad);
+    }
+  return d;
+}
+
+std::string dof_name(int k) {
+  return "coordinate " + std::to_string(k) + " (control point " + std::to_string(k / 3) +
+         ", axis " + "xyz"[k % 3] + ")";
+}
+
+// a small knit-like patch pressed into contact: 2 rows × 2 loops, d ≈ 0.8
+Sample pressed_patch() {
+  return make(knit_like_sample(2, 2, 8, 0.125, 0.8));
+}
+
+TEST(ContactTerm, NameAndEmptyStats) {
+  const Sample s = pressed_patch();
+  ContactTerm term(s.model);
+  EXPECT_EQ(term.name(), "contact");
+  EXPECT_EQ(term.last_stats().point_pairs_in_contact, 0);
+  EXPECT_TRUE(std::isinf(term.last_stats().min_distance_ratio));
+}
+
+TEST(ContactTerm, RejectsTooManyContactPoints) {
+  Params p;
+  p.contact_points = ContactTerm::MAX_CONTACT_POINTS + 1;
+  EXPECT_THROW(ContactTerm(make(knit_like_sample(1, 1, 8, 0.125), p).model), std::invalid_argument);
+}
+
+TEST(ContactTerm, AssembledForceIsMinusEnergyGradient) {
+  const Sample s = pressed_patch();
+  ContactTerm term(s.model);
+  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(s.q.size());
+  const Eigen::VectorXd f = force_of(term, s, zero);
+  ASSERT_GT(term.last_stats().point_pairs_in_contact, 100);
+  ASSERT_GT(max_abs(f), 0) << "no contact force: nothing to compare";
+  const double scale = max_abs(f);
+  const double h = 1e-7;
+  for (int k = 0; k < s.q.size(); ++k) {
+    Eigen::VectorXd qp = s.q, qm = s.q;
+    qp[k] += h;
+    qm[k] -= h;
+    const double fd = -(term.energy(s.model, qp) - term.energy(s.model, qm)) / (2 * h);
+    EXPECT_NEAR(f[k], fd, 1e-6 * scale) << dof_name(k);
+  }
+}
+
+TEST(ContactTerm, AssembledDampingForceIsMinusDampingGradient) {
+  const Sample s = pressed_patch();
+  ContactTerm term(s.model);
+  const Eigen::VectorXd v = random_vector(s.q.size(), 5.0, 11);
+  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(s.q.size());
+  const Eigen::VectorXd fdamp = force_of(term, s, v) - force_of(term, s, zero);
+  ASSERT_GT(max_abs(fdamp), 0);
+  const double scale = max_abs(fdamp);
+  const double h = 1e-3;  // D is quadratic in v: central differences are exact
+  for (int k = 0; k < v.size(); ++k) {
+    Eigen::VectorXd vp = v, vm = v;
+    vp[k] += h;
+    vm[k] -= h;
+    const double fd =
+        -(total_damping(s.model, s.q, vp) - total_damping(s.model, s.q, vm)) / (2 * h);
+    EXPECT_NEAR(fdamp[k], fd, 1e-8 * scale) << dof_name(k);
+  }
+}
+
+// BVH and brute force agree on the point pairs in contact, the energy and the force
+void expect_bvh_matches_brute(const Sample& s, const Eigen::VectorXd& v, const std::string& what,
+                              const Eigen::VectorXd* build_at = nullptr) {
+  ContactTerm bvh(s.model, ContactCulling::BVH), brute(s.model, ContactCulling::BRUTE_FORCE);
+  bvh.set_record_point_pairs(true);
+  brute.set_record_point_pairs(true);
+  if (build_at) {
+    // build the tree on other positions, so that this evaluation is a refit
+    Eigen::VectorXd f = Eigen::VectorXd::Zero(s.q.size());
+    bvh.add_force(s.model, *build_at, v, f);
+  }
+  double e_bvh = 0, e_brute = 0;
+  const Eigen::VectorXd f_bvh = force_of(bvh, s, v, &e_bvh);
+  const Eigen::VectorXd f_brute = force_of(brute, s, v, &e_brute);
+  const ContactStats& a = bvh.last_stats();
+  const ContactStats& b = brute.last_stats();
+  ASSERT_GT(b.point_pairs_in_contact, 0) << what << ": no contact, nothing to compare";
+  EXPECT_EQ(bvh.last_point_pairs(), brute.last_point_pairs()) << what;
+  EXPECT_EQ(a.point_pairs_in_contact, b.point_pairs_in_contact) << what;
+  EXPECT_EQ(static_cast<long long>(bvh.last_point_pairs().size()), a.point_pairs_in_contact);
+  EXPECT_NEAR(a.min_distance_ratio, b.min_distance_ratio, 1e-14) << what;
+  EXPECT_NEAR(e_bvh, e_brute, 1e-12 * std::abs(e_brute)) << what;
+  const double scale = max_abs(f_brute);
+  for (int k = 0; k < f_brute.size(); ++k)
+    ASSERT_NEAR(f_bvh[k], f_brute[k], 1e-11 * scale) << what << ": " << dof_name(k);
+  // culling must visit far fewer pairs than brute force
+  EXPECT_LT(a.candidate_segment_pairs, b.candidate_segment_pairs) << what;
+  EXPECT_LT(a.point_pairs_tested, b.point_pairs_tested / 4) << what;
+}
+
+TEST(ContactTerm, BvhMatchesBruteForceOnRandomTangles) {
+  for (unsigned seed : {1u, 2u, 3u, 4u}) {
+    const Sample s = make(random_tangle(4, 30, 3.0, seed));
+    const Eigen::VectorXd v = random_vector(s.q.size(), 3.0, seed + 100);
+    expect_bvh_matches_brute(s, v, "random tangle, seed " + std::to_string(seed));
+  }
+}
+
+TEST(ContactTerm, BvhMatchesBruteForceOnKnitSample) {
+  const Sample s = make(knit_like_sample(4, 4, 8, 0.125, 0.9));
+  const Eigen::VectorXd v = random_vector(s.q.size(), 3.0, 7);
+  expect_bvh_matches_brute(s, v, "knit sample");
+}
+
+TEST(ContactTerm, BvhMatchesBruteForceAfterRefit) {
+  // the tree is built on one configuration, then refit on a strongly moved one
+  Params p;
+  p.contact_points = 16;
+  const Sample s0 = make(random_tangle(3, 30, 3.0, 9), p);
+  Sample s = s0;
+  s.q += random_vector(s.q.size(), 0.3, 10);
+  const Eigen::VectorXd v = random_vector(s.q.size(), 3.0, 12);
+  expect_bvh_matches_brute(s, v, "tangle after refit", &s0.q);
+}
+
+TEST(ContactTerm, ResultsDoNotDependOnThreadCount) {
+  const Sample s = make(knit_like_sample(6, 6, 8, 0.125, 0.9));
+  const Eigen::VectorXd v = random_vector(s.q.size(), 3.0, 21);
+  Eigen::VectorXd f1, f2;
+  double e1 = 0, e2 = 0;
+  ContactStats st1, st2;
+  {
+    tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+    ContactTerm term(s.model);
+    f1 = force_of(term, s, v, &e1);
+    st1 = term.last_stats();
+  }
+  {
+    tbb::global_control two(tbb::global_control::max_allowed_parallelism, 2);
+    ContactTerm term(s.model);
+    force_of(term, s, v);  // a second evaluation runs the refit path
+    f2 = force_of(term, s, v, &e2);
+    st2 = term.last_stats();
+  }
+  ASSERT_GT(st1.point_pairs_in_contact, 0);
+  EXPECT_EQ(e1, e2);
+  EXPECT_EQ(st1.point_pairs_in_contact, st2.point_pairs_in_contact);
+  EXPECT_EQ(st1.point_pairs_tested, st2.point_pairs_tested);
+  EXPECT_EQ(st1.min_distance_ratio, st2.min_distance_ratio);
+  for (int k = 0; k < f1.size(); ++k) ASSERT_EQ(f1[k], f2[k]) << dof_name(k);
+}
+
+TEST(ContactTerm, ConservesMomentumAndEnergyForcesHaveNoTorque) {
+  for (unsigned seed : {5u, 6u}) {
+    const Sample s = make(random_tangle(3, 30, 2.5, seed));
+    ContactTerm term(s.model);
+    const Eigen::VectorXd zero = Eigen::VectorXd::Zero(s.q.size());
+    const Eigen::VectorXd v = random_vector(s.q.size(), 3.0, seed);
+    const Eigen::VectorXd f = force_of(term, s, zero);
+    const Eigen::VectorXd fv = force_of(term, s, v);
+    ASSERT_GT(term.last_stats().point_pairs_in_contact, 0);
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero(), sum_v = Eigen::Vector3d::Zero();
+    Eigen::Vector3d torque = Eigen::Vector3d::Zero();
+    double magnitude = 0, moment = 0;
+    for (int k = 0; k < s.model.num_cp(); ++k) {
+      const Eigen::Vector3d fk = f.segment<3>(3 * k), xk = s.q.segment<3>(3 * k);
+      sum += fk;
+      sum_v += fv.segment<3>(3 * k);
+      torque += xk.cross(fk);
+      magnitude += fk.norm() + fv.segment<3>(3 * k).norm();
+      moment += xk.norm() * fk.norm();
+    }
+    ASSERT_GT(magnitude, 0);
+    EXPECT_LE(sum.norm(), 1e-12 * magnitude) << "seed " << seed;
+    EXPECT_LE(sum_v.norm(), 1e-12 * magnitude) << "seed " << seed << " (with damping)";
+    // rotation invariance of E: Σ x × (−∂E/∂x) = 0 (contact damping is a friction
+    // stand-in and does exert a couple, so only the conservative part is checked)
+    EXPECT_LE(torque.norm(), 1e-12 * moment) << "seed " << seed;
+  }
+}
+
+TEST(ContactTerm, DampingOnlyRemovesEnergy) {
+  const Sample s = make(random_tangle(3, 30, 2.5, 8));
+  ContactTerm term(s.model);
+  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(s.q.size());
+  const Eigen::VectorXd f0 = force_of(term, s, zero);
+  for (unsigned seed = 0; seed < 5; ++seed) {
+    const Eigen::VectorXd v = random_vector(s.q.size(), 10.0, 40 + seed);
+    const Eigen::VectorXd fdamp = force_of(term, s, v) - f0;
+    double power = 0;  // vᵀf as a plain loop (see max_abs)
+    for (Eigen::Index k = 0; k < v.size(); ++k) power += v[k] * fdamp[k];
+    const double d = total_damping(s.model, s.q, v);
+    ASSERT_GT(d, 0);
+    EXPECT_LT(power, 0) << "seed " << seed;
+    EXPECT_NEAR(power, -2 * d, 1e-9 * d) << "seed " << seed;
+  }
+}
+
+TEST(ContactTerm, PushedYarnsNeverComeCloserThanHalfTheContactDistance) {
+  // a free yarn pressed by 5000 dyn per cm of yarn (≈ 5 g-force per cm, about 850 times its
+  // weight) into the groove between two pinned, touching parallel yarns (on a single
+  // pinned yarn it would slide off sideways), from rest at d = 1.05; symplectic Euler with
+  // only the contact term (energy + damping) and the push
+  const Params p;
+  const double two_r = 2 * p.radius;
+  const double half_gap = 0.51 * two_r;  // bottom yarns 1.02·2r apart (centre to centre)
+  const double height = std::sqrt(std::pow(1.05 * two_r, 2) - half_gap * half_gap);
+  const double h = 0.3;
+  ModelBuilder builder;
+  for (double y : {-half_gap, half_gap}) {
+    Eigen::Matrix3Xd bottom(3, 19);
+    for (int k = 0; k < bottom.cols(); ++k) bottom.col(k) = Eigen::Vector3d((k - 9) * h, y, 0);
+    builder.add_yarn(bottom);
+  }
+  Eigen::Matrix3Xd top(3, 11);
+  for (int k = 0; k < top.cols(); ++k) top.col(k) = Eigen::Vector3d((k - 5) * h, 0, height);
+  builder.add_yarn(top);
+  const Model model = builder.build(p);
+  Eigen::VectorXd q = builder.positions();
+  Eigen::VectorXd v = Eigen::VectorXd::Zero(q.size());
+  const int first_free = 3 * model.yarns[2].cp_begin;
+  const int free_dofs = static_cast<int>(q.size()) - first_free;
+  const double push = 5000;  // dyn/cm
+  ContactTerm term(model);
+  double min_d = std::numeric_limits<double>::infinity();
+  const double dt = 1e-5;
+  for (int step = 0; step < 3000; ++step) {
+    Eigen::VectorXd f = Eigen::VectorXd::Zero(q.size());
+    term.add_force(model, q, v, f);
+    min_d = std::min(min_d, term.last_stats().min_distance_ratio);
+    for (int k = first_free; k < q.size(); ++k) {
+      const double m = model.mass[k / 3];
+      const double fk = f[k] + (k % 3 == 2 ? -push * m / p.density : 0.0);
+      v[k] += dt * fk / m;
+    }
+    q.tail(free_dofs) += dt * v.tail(free_dofs);
+    ASSERT_TRUE(q.allFinite()) << "step " << step;
+  }
+  EXPECT_LT(min_d, 0.9) << "the push should press the yarns well into contact";
+  EXPECT_GE(min_d, 0.5);
+  // the free yarn still lies in the groove, above the pinned ones
+  for (int k = model.yarns[2].cp_begin + 1; k + 1 < model.yarns[2].cp_end; ++k) {
+    EXPECT_GT(q[3 * k + 2], 0.0) << "control point " << k;
+    EXPECT_LT(std::abs(q[3 * k + 1]), half_gap) << "control point " << k;
+  }
+}
+
+}  // namespace
+}  // namespace knit
