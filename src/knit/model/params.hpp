@@ -10,7 +10,7 @@ struct Params {
   double k_len = 2000;            ///< length energy stiffness (g cm²/s²)
   double k_bend = 5;              ///< bending stiffness (g cm³/s²)
   double k_global = 0;            ///< global (mass-proportional) damping (g/s)
-  double k_contact = 3250;        ///< yarn–yarn contact stiffness (g/(cm² s²))
+  double k_contact = 3250;        ///< yarn–yarn contact stiffness (erg/cm² = g/s²)
   double k_dt = 0.003;            ///< tangential contact damping (g/(cm² s))
   double k_dn = 0.03;             ///< normal contact damping (g/(cm² s))
   double alpha_small = 0.675;     ///< non-rigid damping, small regions ∈ [0,1]

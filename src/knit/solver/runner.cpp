@@ -13,6 +13,7 @@
 #include <limits>
 #include <sstream>
 
+#include "knit/contact/contact_term.hpp"
 #include "knit/io/state_file.hpp"
 
 namespace knit {
@@ -44,7 +45,12 @@ std::string format_duration(double s) {
 
 }  // namespace
 
-ContactReport contact_report(const Simulator& sim) { return {}; }
+ContactReport contact_report(const Simulator& sim) {
+  const auto* contact = dynamic_cast<const ContactTerm*>(sim.find_term("contact"));
+  if (!contact) return {};
+  const ContactStats& st = contact->last_stats();
+  return {true, st.point_pairs_in_contact, st.min_distance_ratio};
+}
 
 RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
   namespace fs = std::filesystem;

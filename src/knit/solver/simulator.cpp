@@ -3,6 +3,7 @@
 #include <chrono>
 #include <sstream>
 
+#include "knit/contact/contact_term.hpp"
 #include "knit/energy/bending.hpp"
 #include "knit/energy/global_damping.hpp"
 #include "knit/energy/gravity.hpp"
@@ -41,6 +42,7 @@ std::vector<std::unique_ptr<Term>> default_terms(const Model& model) {
   terms.push_back(std::make_unique<BendingEnergy>());
   terms.push_back(std::make_unique<LengthEnergy>());
   if (model.params.k_global > 0) terms.push_back(std::make_unique<GlobalDamping>());
+  if (model.params.contact) terms.push_back(std::make_unique<ContactTerm>(model));
   return terms;
 }
 
