@@ -1,0 +1,196 @@
+#include "knit/filters/nonrigid_damping.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <map>
+#include <stdexcept>
+#include <string>
+
+namespace knit {
+
+namespace {
+
+struct RigidFit {
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();
+  Eigen::Vector3d omega = Eigen::Vector3d::Zero();
+};
+
+}  // namespace
+
+RegionList small_stitch_regions(const Model& model) {
+  std::map<std::pair<int, int>, std::vector<int>> loops;
+  for (int i = 0; i < model.num_seg(); ++i)
+    if (model.stitch[i].row >= 0) loops[{model.stitch[i].row, model.stitch[i].col}].push_back(i);
+  RegionList regions;
+  for (const auto& [rc, segs] : loops) {
+    std::vector<int> region = segs;
+    const auto below = loops.find({rc.first - 1, rc.second});
+    if (below != loops.end())
+      region.insert(region.end(), below->second.begin(), below->second.end());
+    std::sort(region.begin(), region.end());
+    regions.push_back(std::move(region));
+  }
+  return regions;
+}
+
+RegionList large_stitch_regions(const Model& model, int block, int stride) {
+  if (block < 1 || stride < 1)
+    throw std::invalid_argument("large regions need block >= 1 and stride >= 1");
+  int rows = 0, cols = 0;
+  for (const StitchCoord& s : model.stitch)
+    if (s.row >= 0) rows = std::max(rows, s.row + 1), cols = std::max(cols, s.col + 1);
+  RegionList regions;
+  const int first = -(block - stride) / stride * stride;
+  for (int r0 = first; r0 < rows; r0 += stride)
+    for (int c0 = first; c0 < cols; c0 += stride) {
+      std::vector<int> region;
+      for (int i = 0; i < model.num_seg(); ++i) {
+        const StitchCoord& s = model.stitch[i];
+        if (s.row >= std::max(r0, 0) && s.row < r0 + block && s.col >= std::max(c0, 0) &&
+            s.col < c0 + block)
+          region.push_back(i);
+      }
+      if (!region.empty()) regions.push_back(std::move(region));
+    }
+  return regions;
+}
+
+RigidRegionPass::RigidRegionPass(const Model& model, RegionList regions, double alpha)
+    : m_regions(std::move(regions)), m_alpha(alpha) {
+  if (!(alpha >= 0 && alpha <= 1))
+    throw std::invalid_argument("non-rigid damping strength alpha must lie in [0, 1], got " +
+                                std::to_string(alpha));
+  const int nseg = model.num_seg();
+  std::vector<int> count(nseg, 0);
+  for (size_t r = 0; r < m_regions.size(); ++r)
+    for (int i : m_regions[r]) {
+      if (i < 0 || i >= nseg)
+        throw std::out_of_range("region " + std::to_string(r) + " names segment " +
+                                std::to_string(i) + " (the model has " + std::to_string(nseg) +
+                                " segments)");
+      ++count[i];
+    }
+  m_seg_begin.assign(nseg + 1, 0);
+  for (int i = 0; i < nseg; ++i) m_seg_begin[i + 1] = m_seg_begin[i] + count[i];
+  m_seg_regions.resize(m_seg_begin[nseg]);
+  std::vector<int> fill(m_seg_begin.begin(), m_seg_begin.end() - 1);
+  for (size_t r = 0; r < m_regions.size(); ++r)
+    for (int i : m_regions[r]) m_seg_regions[fill[i]++] = static_cast<int>(r);
+}
+
+void RigidRegionPass::velocity_change(const SampleSegments& samples, const Eigen::Matrix3Xd& x,
+                                      const Eigen::Matrix3Xd& u, Eigen::Matrix3Xd& dv) const {
+  const int per = samples.samples_per_segment();
+  auto share = [&](int seg) { return m_seg_begin[seg + 1] - m_seg_begin[seg]; };
+  // rigid motion of every region, each computed alone from the same velocities
+  std::vector<RigidFit> fit(m_regions.size());
+  tbb::parallel_for(
+      tbb::blocked_range<size_t>(0, m_regions.size(), 16),
+      [&](const tbb::blocked_range<size_t>& range) {
+        for (size_t r = range.begin(); r < range.end(); ++r) {
+          double mass = 0;
+          Eigen::Vector3d mx = Eigen::Vector3d::Zero(), p = Eigen::Vector3d::Zero();
+          for (int i : m_regions[r]) {
+            const double inv_share = 1.0 / share(i);
+            for (int k = 0; k < per; ++k) {
+              const int s = i * per + k;
+              const double w = samples.mass(s) * inv_share;
+              mass += w;
+              mx += w * x.col(s);
+              p += w * u.col(s);
+            }
+          }
+          if (!(mass > 0)) continue;
+          RigidFit& f = fit[r];
+          f.centre = mx / mass;
+          f.velocity = p / mass;
+          Eigen::Vector3d l = Eigen::Vector3d::Zero();
+          Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();
+          for (int i : m_regions[r]) {
+            const double inv_share = 1.0 / share(i);
+            for (int k = 0; k < per; ++k) {
+              const int s = i * per + k;
+              const double w = samples.mass(s) * inv_share;
+              const Eigen::Vector3d d = x.col(s) - f.centre;
+              l += w * d.cross(u.col(s) - f.velocity);
+              inertia += w * (d.squaredNorm() * Eigen::Matrix3d::Identity() - d * d.transpose());
+            }
+          }
+          // ω = I⁺ L: eigen-directions with (relatively) no inertia get no spin
+          const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(inertia);
+          const double top = eig.eigenvalues().maxCoeff();
+          for (int a = 0; a < 3; ++a) {
+            const double lambda = eig.eigenvalues()[a];
+            if (lambda > 1e-10 * top) {
+              const Eigen::Vector3d e = eig.eigenvectors().col(a);
+              f.omega += e * (e.dot(l) / lambda);
+            }
+          }
+        }
+      });
+  // every sample moves toward the mean of its regions' rigid velocities
+  const int nseg = static_cast<int>(m_seg_begin.size()) - 1;
+  tbb::parallel_for(tbb::blocked_range<int>(0, nseg, 64),
+                    [&](const tbb::blocked_range<int>& range) {
+                      for (int i = range.begin(); i < range.end(); ++i) {
+                        const int n = share(i);
+                        if (n == 0) continue;
+                        const double scale = m_alpha / n;
+                        for (int k = 0; k < per; ++k) {
+                          const int s = i * per + k;
+                          Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+                          for (int j = m_seg_begin[i]; j < m_seg_begin[i + 1]; ++j) {
+                            const RigidFit& f = fit[m_seg_regions[j]];
+                            sum += f.velocity + f.omega.cross(x.col(s) - f.centre) - u.col(s);
+                          }
+                          dv.col(s) += scale * sum;
+                        }
+                      }
+                    });
+}
+
+namespace {
+
+RegionList without_unplaced(const Model& model, RegionList regions) {
+  // segments without stitch coordinates are never touched
+  for (auto& region : regions)
+    region.erase(std::remove_if(region.begin(), region.end(),
+                                [&](int i) {
+                                  return i >= 0 && i < model.num_seg() && model.stitch[i].row < 0;
+                                }),
+                 region.end());
+  return regions;
+}
+
+}  // namespace
+
+NonRigidDampingFilter::NonRigidDampingFilter(const Model& model, double alpha_small,
+                                             double alpha_large, int samples_per_segment)
+    : m_samples(model, samples_per_segment) {
+  m_passes.emplace_back(model, without_unplaced(model, small_stitch_regions(model)), alpha_small);
+  m_passes.emplace_back(model, without_unplaced(model, large_stitch_regions(model)), alpha_large);
+}
+
+NonRigidDampingFilter::NonRigidDampingFilter(const Model& model, RegionList regions, double alpha,
+                                             int samples_per_segment)
+    : m_samples(model, samples_per_segment) {
+  m_passes.emplace_back(model, std::move(regions), alpha);
+}
+
+void NonRigidDampingFilter::apply(const Model& model, const Eigen::VectorXd& q, Eigen::VectorXd& v,
+                                  double /*time*/) {
+  const Eigen::Matrix3Xd x = m_samples.positions(model, q);
+  for (const RigidRegionPass& pass : m_passes) {
+    if (pass.alpha() == 0 || pass.regions().empty()) continue;
+    const Eigen::Matrix3Xd u = m_samples.velocities(model, v);
+    Eigen::Matrix3Xd dv = Eigen::Matrix3Xd::Zero(3, m_samples.num_samples());
+    pass.velocity_change(m_samples, x, u, dv);
+    m_samples.apply(model, dv, v);
+  }
+}
+
+}  // namespace knit

@@ -1,0 +1,79 @@
+#pragma once
+// Non-rigid motion damping (MODEL.md §4), a velocity filter standing in for yarn "fuzz":
+// fixed, overlapping regions of the cloth are nudged toward their own rigid motion.
+//
+// For each region R (a set of segments, hence of their sample segments) with weights
+// w_s = m_s / r(s) — a sample's mass shared among the r(s) regions of the pass containing
+// it — compute the centre of mass x_c, linear momentum P, angular momentum L about x_c and
+// inertia tensor I, hence v_rigid(x) = P / M + ω × (x − x_c), ω = I⁺ L (pseudo-inverse: a
+// region whose samples are collinear gets no spin about their line). Then
+//     Δv(s) = (α / r(s)) Σ_{R ∋ s} (v_rigid,R(s) − v(s)).
+// Because every region's fit uses the shared weights, Σ_s m_s Δv_s = 0 and
+// Σ_s m_s x_s × Δv_s = 0: the pass conserves the cloth's linear and angular momentum
+// exactly (also at the control points, see SampleSegments), whatever α and the overlaps.
+//
+// Regions from stitch coordinates (Model::stitch; segments with row −1 are never touched):
+//  - small, one per stitch (r, c): the loop of (r, c) with the loop it is pulled through,
+//    (r − 1, c) (just (0, c) on row 0). Each loop is in two of them, so they overlap along
+//    the wale; side by side they are joined by the yarn itself and by the large regions.
+//    Strength α_small.
+//  - large: blocks of 4 × 4 stitches starting every 2 rows and 2 columns (from −2, clipped
+//    to the fabric), so that every stitch lies in 2 × 2 of them. Strength α_large.
+// The small pass runs first, then the large one on the velocities it left.
+#include <Eigen/Core>
+#include <string_view>
+#include <vector>
+
+#include "knit/filters/sample_segments.hpp"
+#include "knit/filters/velocity_filter.hpp"
+
+namespace knit {
+
+/// Lists of segment indices, one per region.
+using RegionList = std::vector<std::vector<int>>;
+
+/// One small region per stitch: segments of (r, c) and (r − 1, c).
+RegionList small_stitch_regions(const Model& model);
+/// Blocks of `block` × `block` stitches starting every `stride` rows and columns.
+RegionList large_stitch_regions(const Model& model, int block = 4, int stride = 2);
+
+/// One pass: the regions, their strength α ∈ [0, 1] and the segment → regions map.
+class RigidRegionPass {
+ public:
+  RigidRegionPass(const Model& model, RegionList regions, double alpha);
+  /// Adds this pass's Δv for every sample (3 × num_samples) from sample positions x and
+  /// velocities u.
+  void velocity_change(const SampleSegments& samples, const Eigen::Matrix3Xd& x,
+                       const Eigen::Matrix3Xd& u, Eigen::Matrix3Xd& dv) const;
+  double alpha() const { return m_alpha; }
+  const RegionList& regions() const { return m_regions; }
+
+ private:
+  RegionList m_regions;
+  double m_alpha;
+  std::vector<int> m_seg_begin;  // CSR: regions containing each segment
+  std::vector<int> m_seg_regions;
+};
+
+class NonRigidDampingFilter : public VelocityFilter {
+ public:
+  /// The two passes of MODEL.md §4 from the model's stitch coordinates.
+  NonRigidDampingFilter(const Model& model, double alpha_small, double alpha_large,
+                        int samples_per_segment = 8);
+  /// A single pass over explicit regions (lists of segment indices).
+  NonRigidDampingFilter(const Model& model, RegionList regions, double alpha,
+                        int samples_per_segment = 8);
+
+  std::string_view name() const override { return "nonrigid_damping"; }
+  void apply(const Model& model, const Eigen::VectorXd& q, Eigen::VectorXd& v,
+             double time) override;
+
+  const SampleSegments& samples() const { return m_samples; }
+  const std::vector<RigidRegionPass>& passes() const { return m_passes; }
+
+ private:
+  SampleSegments m_samples;
+  std::vector<RigidRegionPass> m_passes;
+};
+
+}  // namespace knit

@@ -1,0 +1,589 @@
+#include "knit/pattern/generator.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <unordered_map>
+
+#include "knit/spline/basis.hpp"
+#include "knit/spline/fit.hpp"
+
+namespace knit {
+
+namespace {
+
+constexpr double PI = 3.14159265358979323846;
+
+// The loop model: Keenan Crane's plain-knit curve (t + a sin 2t, h cos t, ·), one loop per
+// 2π of t, head at t = 0, sinkers (the arcs joining neighbouring loops) at ±π; a = 3/2,
+// h = 4, loops 2π wide, in units where the yarn radius is 4/5. Crane stacks rows h + 1/2
+// apart; we use 4.75 (a slightly more open fabric) and a deeper z swing, D = 2.8 instead
+// of 2, because with 8 spline segments per stitch the fitted curve strays up to ~0.3 r
+// from the model and the extra depth pays for it. With r = 0.125 cm: stitches 0.98 cm
+// wide, rows 0.74 cm apart, the yarns that cross 0.44 cm apart in z.
+constexpr double LOOP_A = 1.5;         // rounds the loop (a)
+constexpr double LOOP_H = 4.0;         // half height of a loop (h)
+constexpr double UNIT_RADIUS = 0.8;    // yarn radius in loop units
+constexpr double UNIT_WIDTH = 2 * PI;  // stitch width in loop units
+constexpr double UNIT_ROW = 4.75;      // row height in loop units
+constexpr double UNIT_DEPTH = 2.8;     // z separation D of yarns where they cross
+// The z profile. Seen from the front, each half t ∈ [0, π] of a loop crosses the legs of the
+// loop above with its head (t ≈ 0.3), the foot of the loop above with its upper leg
+// (t ≈ 1.35), the head of the loop below with its lower leg (t ≈ 1.8) and the upper leg of
+// the loop below with its foot (t ≈ 2.85). A knit loop is pulled through the loop below from
+// back to front: its legs pass in front of the head below, its foot behind the legs below;
+// a purl loop the other way round. Both legs of a loop lie at one depth ℓ (a swing between
+// t ≈ 1.35 and 1.8 would be too short for 8 segments per stitch to follow), and each
+// crossing fixes the other yarn's depth:
+//   legs ℓ(r,c),  head(r,c) = ℓ(r+1,c) − σ(r+1,c) D,  foot(r,c) = ℓ(r−1,c) − σ(r,c) D,
+// σ = +1 knit, −1 purl (from the front). ℓ = 0 in rows that are all knit or all purl
+// (stockinette, garter); where a row changes between knit and purl (ribs, seed) ℓ = 0.6 σ D,
+// so that the sinker crossing from one face to the other between two columns stays clear
+// of the legs beside it. Between these depths z follows cos²t (Crane's −d cos 2t when head
+// and foot lie at the same depth).
+constexpr double LEG_OFFSET = 0.6;  // ℓ / D where a row changes between knit and purl
+constexpr double SINK_BLEND = 0.5;  // half width (in t) of a sinker's change of depth
+// segments of the next piece fitted along with each piece (see generate_knit)
+constexpr int LOOKAHEAD_SEGMENTS = 3;
+
+double smoother(double u) {
+  u = std::clamp(u, 0.0, 1.0);
+  return u * u * u * (u * (6 * u - 15) + 10);
+}
+
+double blend(double a, double b, double u) {
+  return a + (b - a) * smoother(u);
+}
+
+struct Dims {
+  double w, rh, depth;  // cm
+  double sx, sy;        // loop units → cm along x and y
+};
+
+// depths (cm) of the parts of one stitch's loop, see the z profile above
+struct LoopDepths {
+  double head = 0, legs = 0, foot = 0;
+  double foot_left = 0, foot_right = 0;  // feet of the neighbours the sinkers lead to
+};
+
+// z of a stitch at parameter t ∈ [−π, π]: the legs' depth plus the head's and the foot's
+// offsets from it, each weighted by cos²t on its half (Crane's −d cos 2t when head and
+// foot lie at the same depth)
+double profile_z(double t, const LoopDepths& z) {
+  const double tau = std::abs(t), c2 = std::cos(tau) * std::cos(tau);
+  if (tau <= 0.5 * PI) return z.legs + (z.head - z.legs) * c2;
+  // across the boundary between two stitches the foot's depth changes smoothly from this
+  // stitch's to the neighbour's over |t| ∈ [π − SINK_BLEND, π + SINK_BLEND]
+  const double nb = t > 0 ? z.foot_right : z.foot_left;
+  const double foot = blend(z.foot, nb, (tau - (PI - SINK_BLEND)) / (2 * SINK_BLEND));
+  return z.legs + (foot - z.legs) * c2;
+}
+
+// arclength parameters of a polyline, scaled to [0, segments]
+Eigen::VectorXd chord_parameters(const Eigen::Matrix3Xd& p, int segments) {
+  Eigen::VectorXd u(p.cols());
+  u[0] = 0;
+  for (int j = 1; j < p.cols(); ++j) u[j] = u[j - 1] + (p.col(j) - p.col(j - 1)).norm();
+  return u * (segments / u[p.cols() - 1]);
+}
+
+struct PieceSpec {
+  Eigen::Matrix3Xd points;  // dense centreline in yarn order (unrolled coordinates)
+  int segments = 0;
+  YarnPiece kind = YarnPiece::STITCH;
+  StitchCoord first, second;  // stitch of the first and of the second half of the segments
+};
+
+class Layout {
+ public:
+  Layout(const Pattern& pattern, const KnitOptions& opt, const Dims& dims)
+      : m_pattern(pattern), m_opt(opt), m_dims(dims) {}
+
+  // +1 knit, −1 purl; rows above the top continue the top row, below row 0 repeat row 0
+  int sigma(int row, int col) const {
+    row = std::clamp(row, 0, m_opt.rows - 1);
+    return m_pattern.is_knit(row, col) ? 1 : -1;
+  }
+  // depth of the legs of (row, col)
+  double legs(int row, int col) const {
+    row = std::clamp(row, 0, m_opt.rows - 1);
+    const int s = sigma(row, col);
+    bool mixed = false;
+    for (int dc : {-1, 1}) {
+      const auto [nr, nc] = neighbour(row, col, dc);
+      if (sigma(nr, nc) != s) mixed = true;
+    }
+    return mixed ? LEG_OFFSET * s * m_dims.depth : 0.0;
+  }
+  double head(int row, int col) const {
+    return legs(row + 1, col) - sigma(row + 1, col) * m_dims.depth;
+  }
+  double foot(int row, int col) const {
+    return legs(row - 1, col) - sigma(row, col) * m_dims.depth;
+  }
+  // the stitch the yarn reaches through the sinker at the left (dc = −1) or right (+1)
+  // of (row, col), or the stitch itself at the edge of a flat piece
+  std::pair<int, int> neighbour(int row, int col, int dc) const {
+    const int c = col + dc;
+    if (c >= 0 && c < m_opt.cols) return {row, c};
+    if (!m_opt.in_the_round) return {row, col};
+    if (c < 0) return row > 0 ? std::make_pair(row - 1, m_opt.cols - 1) : std::make_pair(row, col);
+    return row + 1 < m_opt.rows ? std::make_pair(row + 1, 0) : std::make_pair(row, col);
+  }
+
+  // centre of the loop of (row, col) in unrolled coordinates, and the helix ramp
+  double loop_x(int row, int col) const {
+    if (m_opt.in_the_round) return (row * m_opt.cols + col) * m_dims.w;
+    return (col - 0.5 * (m_opt.cols - 1)) * m_dims.w;
+  }
+  double row_y(int row) const { return (row - 0.5 * (m_opt.rows - 1)) * m_dims.rh; }
+
+  // dense stitch curve; `forward` = the yarn runs in +x
+  Eigen::Matrix3Xd stitch_points(int row, int col, bool forward, int n) const {
+    LoopDepths z;
+    z.head = head(row, col);
+    z.legs = legs(row, col);
+    z.foot = foot(row, col);
+    const auto [lr, lc] = neighbour(row, col, -1);
+    const auto [rr, rc] = neighbour(row, col, +1);
+    z.foot_left = foot(lr, lc);
+    z.foot_right = foot(rr, rc);
+    Eigen::Matrix3Xd p(3, n + 1);
+    for (int k = 0; k <= n; ++k) {
+      const double t = forward ? -PI + 2 * PI * k / n : PI - 2 * PI * k / n;
+      double y = row_y(row) + m_dims.sy * LOOP_H * std::cos(t);
+      if (m_opt.in_the_round) y += m_dims.rh * (col + t / (2 * PI)) / m_opt.cols;
+      p.col(k) = Eigen::Vector3d(loop_x(row, col) + m_dims.sx * (t + LOOP_A * std::sin(2 * t)), y,
+                                 profile_z(t, z));
+    }
+    return p;
+  }
+
+  // the sinker end of a row's edge stitch (t = ±π)
+  Eigen::Vector3d edge_point(int row, bool right) const {
+    const int col = right ? m_opt.cols - 1 : 0;
+    const double t = right ? PI : -PI;
+    double y = row_y(row) + m_dims.sy * LOOP_H * std::cos(t);
+    if (m_opt.in_the_round) y += m_dims.rh * (col + t / (2 * PI)) / m_opt.cols;
+    return {loop_x(row, col) + m_dims.sx * t, y, foot(row, col)};
+  }
+
+  // a flat piece doubles back: a half circle in the fabric plane from the end of `row` to
+  // the start of row + 1, outside the edge, its z turning from one sinker's to the other's
+  Eigen::Matrix3Xd turn_points(int row, bool right, int n) const {
+    const Eigen::Vector3d a = edge_point(row, right), b = edge_point(row + 1, right);
+    const double rho = 0.5 * (b.y() - a.y()), side = right ? 1.0 : -1.0;
+    Eigen::Matrix3Xd p(3, n + 1);
+    for (int k = 0; k <= n; ++k) {
+      const double phi = PI * k / n;
+      p.col(k) =
+          Eigen::Vector3d(a.x() + side * rho * std::sin(phi), a.y() + rho * (1 - std::cos(phi)),
+                          blend(a.z(), b.z(), static_cast<double>(k) / n));
+    }
+    return p;
+  }
+
+  // a free end: from the edge point `e` (where the yarn moves along `dir_x` into the
+  // fabric) it curls back outside the edge (half an ellipse in the xz plane, `reach` cm out
+  // in x) to z_back behind the fabric and runs `run` cm along the back. Returned from the
+  // edge outwards.
+  Eigen::Matrix3Xd tail_points(const Eigen::Vector3d& e, double dir_x, double z_back, double reach,
+                               double run, int n) const {
+    const double rz = 0.5 * (e.z() - z_back);
+    const int n_arc = n / 2;
+    Eigen::Matrix3Xd p(3, n + 1);
+    for (int k = 0; k <= n_arc; ++k) {
+      const double phi = PI * k / n_arc;
+      p.col(k) = Eigen::Vector3d(e.x() - dir_x * reach * std::sin(phi), e.y(),
+                                 e.z() - rz * (1 - std::cos(phi)));
+    }
+    for (int k = n_arc + 1; k <= n; ++k)
+      p.col(k) = Eigen::Vector3d(e.x() + dir_x * run * (k - n_arc) / (n - n_arc), e.y(), z_back);
+    return p;
+  }
+
+  Eigen::Vector3d wrap(const Eigen::Vector3d& u) const {
+    if (!m_opt.in_the_round) return u;
+    // the tube's circumference is cols·w at the back of the loops (z = −depth), so the
+    // inner layer keeps the flat spacing and the outer one opens up
+    const double circ = m_opt.cols * m_dims.w;
+    const double radius = circ / (2 * PI) + m_dims.depth;
+    const double theta = 2 * PI * u.x() / circ, rr = radius + u.z();
+    return {rr * std::sin(theta), u.y(), rr * std::cos(theta)};
+  }
+
+ private:
+  const Pattern& m_pattern;
+  const KnitOptions& m_opt;
+  const Dims& m_dims;
+};
+
+double curve_length(const Eigen::Matrix3Xd& p) {
+  return polyline_length(p);
+}
+
+// yarn length of one plain (stockinette) loop with these dimensions
+double plain_loop_length(const Dims& dims) {
+  LoopDepths plain;
+  plain.head = plain.foot = plain.foot_left = plain.foot_right = -dims.depth;
+  const int n = 2000;
+  Eigen::Matrix3Xd p(3, n + 1);
+  for (int k = 0; k <= n; ++k) {
+    const double t = -PI + 2 * PI * k / n;
+    p.col(k) = Eigen::Vector3d(dims.sx * (t + LOOP_A * std::sin(2 * t)),
+                               dims.sy * LOOP_H * std::cos(t), profile_z(t, plain));
+  }
+  return curve_length(p);
+}
+
+Dims resolve_dims(const KnitOptions& opt) {
+  const double unit = opt.radius / UNIT_RADIUS;
+  Dims d;
+  d.w = opt.stitch_width_cm > 0 ? opt.stitch_width_cm : UNIT_WIDTH * unit;
+  d.rh = opt.row_height_cm > 0 ? opt.row_height_cm : UNIT_ROW * unit;
+  d.depth = opt.loop_depth_cm > 0 ? opt.loop_depth_cm : UNIT_DEPTH * unit;
+  auto set_scale = [&](double f, Dims& x) {
+    x.sx = f * d.w / UNIT_WIDTH;
+    x.sy = f * d.rh / UNIT_ROW;
+    x.w = f * d.w;
+    x.rh = f * d.rh;
+  };
+  set_scale(1.0, d);
+  if (opt.stitch_size_cm > 0) {
+    // the loop length grows monotonically with the in-plane scale: bisect for it
+    Dims probe = d;
+    double lo = 1e-3, hi = 1e3;
+    for (int it = 0; it < 200; ++it) {
+      const double mid = std::sqrt(lo * hi);
+      Dims tmp = d;
+      set_scale(mid, tmp);
+      (plain_loop_length(tmp) < opt.stitch_size_cm ? lo : hi) = mid;
+      if (hi / lo < 1 + 1e-12) break;
+    }
+    set_scale(std::sqrt(lo * hi), probe);
+    d = probe;
+  }
+  return d;
+}
+
+void check_options(const Pattern& pattern, const KnitOptions& opt) {
+  if (pattern.num_rows() == 0 || pattern.num_cols() == 0)
+    throw std::invalid_argument("generate_knit: the pattern is empty");
+  if (opt.rows < 1)
+    throw std::invalid_argument("knit option rows must be >= 1, got " + std::to_string(opt.rows));
+  if (opt.cols < 1)
+    throw std::invalid_argument("knit option cols must be >= 1, got " + std::to_string(opt.cols));
+  if (opt.in_the_round && opt.cols < 3)
+    throw std::invalid_argument("knit option cols must be >= 3 to knit in the round, got " +
+                                std::to_string(opt.cols));
+  if (opt.segments_per_stitch < 4)
+    throw std::invalid_argument("knit option segments_per_stitch must be >= 4, got " +
+                                std::to_string(opt.segments_per_stitch));
+  if (!(opt.radius > 0) || !std::isfinite(opt.radius))
+    throw std::invalid_argument("knit option radius must be a positive length in cm, got " +
+                                std::to_string(opt.radius));
+  const std::pair<const char*, double> lengths[] = {{"stitch_size_cm", opt.stitch_size_cm},
+                                                    {"stitch_width_cm", opt.stitch_width_cm},
+                                                    {"row_height_cm", opt.row_height_cm},
+                                                    {"loop_depth_cm", opt.loop_depth_cm}};
+  for (const auto& [name, value] : lengths)
+    if (!(value >= 0) || !std::isfinite(value))
+      throw std::invalid_argument(std::string("knit option ") + name +
+                                  " must be a length >= 0 in cm (0 = default), got " +
+                                  std::to_string(value));
+}
+
+// closest point on the spline to `p` among segments accepted by `allowed`
+template <class Allowed>
+YarnPoint closest_point(const Eigen::Matrix3Xd& cp, const Eigen::Vector3d& p, Allowed allowed) {
+  const int nseg = static_cast<int>(cp.cols()) - 3;
+  const int n = 16;
+  YarnPoint best;
+  double best_d = std::numeric_limits<double>::infinity();
+  auto eval = [&](int i, double t) { return (cp.middleCols<4>(i) * bspline_basis(t) - p).norm(); };
+  for (int i = 0; i < nseg; ++i) {
+    if (!allowed(i)) continue;
+    for (int k = 0; k <= n; ++k) {
+      const double d = eval(i, static_cast<double>(k) / n);
+      if (d < best_d) best_d = d, best = {i, static_cast<double>(k) / n};
+    }
+  }
+  // refine by golden-section search around the best sample
+  double lo = std::max(0.0, best.t - 1.0 / n), hi = std::min(1.0, best.t + 1.0 / n);
+  const double g = 0.5 * (std::sqrt(5.0) - 1);
+  for (int it = 0; it < 60; ++it) {
+    const double a = hi - g * (hi - lo), b = lo + g * (hi - lo);
+    if (eval(best.segment, a) < eval(best.segment, b))
+      hi = b;
+    else
+      lo = a;
+  }
+  best.t = 0.5 * (lo + hi);
+  return best;
+}
+
+Eigen::Matrix3Xd contact_points(const Eigen::Matrix3Xd& cp, int per) {
+  const int nseg = static_cast<int>(cp.cols()) - 3;
+  Eigen::Matrix3Xd x(3, nseg * per);
+  for (int i = 0; i < nseg; ++i)
+    for (int k = 0; k < per; ++k)
+      x.col(i * per + k) = cp.middleCols<4>(i) * bspline_basis((k + 0.5) / per);
+  return x;
+}
+
+}  // namespace
+
+MinDistance min_distance_brute_force(const Eigen::Matrix3Xd& cp, double radius, int per) {
+  const Eigen::Matrix3Xd x = contact_points(cp, per);
+  const int n = static_cast<int>(x.cols());
+  MinDistance best;
+  double best_d2 = std::numeric_limits<double>::infinity();
+  for (int a = 0; a < n; ++a)
+    for (int b = a + 1; b < n; ++b) {
+      if (b / per - a / per <= 1) continue;
+      const double d2 = (x.col(a) - x.col(b)).squaredNorm();
+      if (d2 < best_d2) best_d2 = d2, best.segment_a = a / per, best.segment_b = b / per;
+    }
+  best.ratio = std::sqrt(best_d2) / (2 * radius);
+  return best;
+}
+
+MinDistance min_distance(const Eigen::Matrix3Xd& cp, double radius, int per) {
+  const Eigen::Matrix3Xd x = contact_points(cp, per);
+  const int n = static_cast<int>(x.cols());
+  const double cell = 3 * radius;
+  // sort the points by grid cell, then look up the 27 cells around each point
+  auto key_of = [&](const Eigen::Vector3i& c) -> std::int64_t {
+    const std::int64_t m = (1 << 20);
+    return ((static_cast<std::int64_t>(c.x()) + m / 2) * m + (c.y() + m / 2)) * m + (c.z() + m / 2);
+  };
+  std::vector<Eigen::Vector3i> cell_of(n);
+  std::vector<std::pair<std::int64_t, int>> keyed(n);
+  for (int a = 0; a < n; ++a) {
+    cell_of[a] = (x.col(a) / cell).array().floor().cast<int>();
+    keyed[a] = {key_of(cell_of[a]), a};
+  }
+  std::sort(keyed.begin(), keyed.end());
+  std::unordered_map<std::int64_t, std::pair<int, int>> ranges;
+  ranges.reserve(n);
+  for (int s = 0; s < n;) {
+    int e = s;
+    while (e < n && keyed[e].first == keyed[s].first) ++e;
+    ranges[keyed[s].first] = {s, e};
+    s = e;
+  }
+  struct Best {
+    double d2 = std::numeric_limits<double>::infinity();
+    int a = -1, b = -1;
+  };
+  const Best best = tbb::parallel_reduce(
+      tbb::blocked_range<int>(0, n, 256), Best{},
+      [&](const tbb::blocked_range<int>& r, Best acc) {
+        for (int a = r.begin(); a < r.end(); ++a)
+          for (int dx = -1; dx <= 1; ++dx)
+            for (int dy = -1; dy <= 1; ++dy)
+              for (int dz = -1; dz <= 1; ++dz) {
+                const auto it = ranges.find(key_of(cell_of[a] + Eigen::Vector3i(dx, dy, dz)));
+                if (it == ranges.end()) continue;
+                for (int s = it->second.first; s < it->second.second; ++s) {
+                  const int b = keyed[s].second;
+                  if (b <= a || b / per - a / per <= 1) continue;
+                  const double d2 = (x.col(a) - x.col(b)).squaredNorm();
+                  // ties broken by index so the result does not depend on the thread count
+                  if (d2 < acc.d2 ||
+                      (d2 == acc.d2 && std::make_pair(a, b) < std::make_pair(acc.a, acc.b)))
+                    acc = {d2, a, b};
+                }
+              }
+        return acc;
+      },
+      [](const Best& l, const Best& r) {
+        if (r.d2 < l.d2 || (r.d2 == l.d2 && std::make_pair(r.a, r.b) < std::make_pair(l.a, l.b)))
+          return r;
+        return l;
+      });
+  if (best.a < 0 || best.d2 > cell * cell) return min_distance_brute_force(cp, radius, per);
+  return {std::sqrt(best.d2) / (2 * radius), best.a / per, best.b / per};
+}
+
+GeneratedKnit generate_knit(const Pattern& pattern_in, const KnitOptions& opt) {
+  check_options(pattern_in, opt);
+  const Pattern pattern = tile(pattern_in, opt.rows, opt.cols);
+  const Dims dims = resolve_dims(opt);
+  const Layout layout(pattern, opt, dims);
+  const int k = opt.segments_per_stitch;
+  const int dense = 16 * k;
+
+  // segment counts of turns and tails: about as long per segment as the stitches
+  const double seg_len = plain_loop_length(dims) / k;
+  const double turn_len = PI * 0.5 * dims.rh;
+  const int k_turn = std::max(2, static_cast<int>(std::lround(turn_len / seg_len)));
+  // a flat piece's ends curl outside its edge; a tube has no edge, there they curl within
+  // the sinker (the row above or below is a row height away)
+  const double tail_run = 0.75 * dims.w, tail_reach = (opt.in_the_round ? 0.1 : 0.35) * dims.w;
+  const double tail_len = tail_run + PI * std::max(tail_reach, dims.depth + 1.1 * opt.radius);
+  const int k_tail = std::max(3, static_cast<int>(std::lround(tail_len / seg_len)));
+
+  std::vector<PieceSpec> pieces;
+  pieces.push_back({});  // the start tail, made below
+  for (int row = 0; row < opt.rows; ++row) {
+    const bool forward = opt.in_the_round || row % 2 == 0;
+    for (int i = 0; i < opt.cols; ++i) {
+      const int col = forward ? i : opt.cols - 1 - i;
+      pieces.push_back({layout.stitch_points(row, col, forward, dense),
+                        k,
+                        YarnPiece::STITCH,
+                        {row, col},
+                        {row, col}});
+    }
+    if (!opt.in_the_round && row + 1 < opt.rows) {
+      const int edge = forward ? opt.cols - 1 : 0;
+      pieces.push_back({layout.turn_points(row, forward, 4 * k_turn),
+                        k_turn,
+                        YarnPiece::TURN,
+                        {row, edge},
+                        {row + 1, edge}});
+    }
+  }
+  // the free ends run one yarn diameter (and a little) behind the back of the first and last
+  // rows and curl around the edge into the first and out of the last stitch
+  auto z_back_of_row = [&](int row) {
+    double z = std::numeric_limits<double>::infinity();
+    for (const auto& p : pieces)
+      if (p.kind == YarnPiece::STITCH && p.first.row == row)
+        z = std::min(z, p.points.row(2).minCoeff());
+    return z - 2.2 * opt.radius;
+  };
+  {
+    const Eigen::Vector3d e = layout.edge_point(0, false);
+    const Eigen::Matrix3Xd out =
+        layout.tail_points(e, +1.0, z_back_of_row(0), tail_reach, tail_run, 8 * k_tail);
+    pieces.front() = {out.rowwise().reverse(), k_tail, YarnPiece::TAIL, {0, 0}, {0, 0}};
+  }
+  {
+    const int last = opt.rows - 1;
+    const double z_back = z_back_of_row(last);
+    const bool forward = opt.in_the_round || last % 2 == 0;
+    const int edge = forward ? opt.cols - 1 : 0;
+    const Eigen::Vector3d e = layout.edge_point(last, forward);
+    pieces.push_back(
+        {layout.tail_points(e, forward ? -1.0 : 1.0, z_back, tail_reach, tail_run, 8 * k_tail),
+         k_tail,
+         YarnPiece::TAIL,
+         {last, edge},
+         {last, edge}});
+  }
+
+  // lay the pieces: each is fitted with its segments, holding the last 3 control points
+  int total_seg = 0;
+  for (const auto& p : pieces) total_seg += p.segments;
+  GeneratedKnit out;
+  out.control_points.resize(3, total_seg + 3);
+  // each piece is fitted together with the first segments of the next one, so its last
+  // control points (which the next piece holds fixed) follow the curve ahead; only the
+  // piece's own control points are kept
+  std::vector<Eigen::Matrix3Xd> wrapped(pieces.size());
+  std::vector<Eigen::VectorXd> params(pieces.size());
+  for (size_t p = 0; p < pieces.size(); ++p) {
+    wrapped[p].resize(3, pieces[p].points.cols());
+    for (int j = 0; j < pieces[p].points.cols(); ++j)
+      wrapped[p].col(j) = layout.wrap(pieces[p].points.col(j));
+    params[p] = chord_parameters(wrapped[p], pieces[p].segments);
+  }
+  int ncp = 0;
+  for (size_t p = 0; p < pieces.size(); ++p) {
+    const PieceSpec& piece = pieces[p];
+    const int seg = piece.segments;
+    int ahead = 0;
+    std::vector<int> take;
+    if (p + 1 < pieces.size()) {
+      ahead = std::min(LOOKAHEAD_SEGMENTS, pieces[p + 1].segments);
+      for (int j = 1; j < params[p + 1].size(); ++j)
+        if (params[p + 1][j] <= ahead + 1e-12) take.push_back(j);
+    }
+    const int n_own = static_cast<int>(wrapped[p].cols());
+    Eigen::Matrix3Xd pts(3, n_own + take.size());
+    Eigen::VectorXd u(n_own + take.size());
+    pts.leftCols(n_own) = wrapped[p];
+    u.head(n_own) = params[p];
+    for (size_t j = 0; j < take.size(); ++j) {
+      pts.col(n_own + j) = wrapped[p + 1].col(take[j]);
+      u[n_own + j] = seg + params[p + 1][take[j]];
+    }
+    const Eigen::Matrix3Xd fixed =
+        ncp == 0 ? Eigen::Matrix3Xd() : Eigen::Matrix3Xd(out.control_points.middleCols(ncp - 3, 3));
+    const Eigen::Matrix3Xd cp = fit_bspline(pts, u, seg + ahead, fixed, 1e-4);
+    const int add = seg + 3 - static_cast<int>(fixed.cols());
+    out.control_points.middleCols(ncp, add) = cp.middleCols(fixed.cols(), add);
+    ncp += add;
+    for (int s = 0; s < seg; ++s) {
+      out.stitch.push_back(2 * s < seg ? piece.first : piece.second);
+      out.piece.push_back(piece.kind);
+    }
+  }
+  assert(ncp == total_seg + 3);
+
+  // glue each free end to the closest yarn point outside its own tail and the stitch it
+  // enters
+  const int nseg = total_seg;
+  const int reach = k_tail + k / 2;
+  const Eigen::Vector3d start = out.control_points.leftCols<4>() * bspline_basis(0.0);
+  const Eigen::Vector3d end = out.control_points.rightCols<4>() * bspline_basis(1.0);
+  const YarnPoint to_start =
+      closest_point(out.control_points, start, [&](int i) { return i >= reach; });
+  const YarnPoint to_end =
+      closest_point(out.control_points, end, [&](int i) { return i < nseg - reach; });
+  out.glues.push_back({YarnPoint{0, 0.0}, to_start});
+  out.glues.push_back({YarnPoint{nseg - 1, 1.0}, to_end});
+  out.glue_gap_cm.push_back(
+      (out.control_points.middleCols<4>(to_start.segment) * bspline_basis(to_start.t) - start)
+          .norm());
+  out.glue_gap_cm.push_back(
+      (out.control_points.middleCols<4>(to_end.segment) * bspline_basis(to_end.t) - end).norm());
+
+  // centre: a flat piece on the origin, a tube on its axis (y centred)
+  Eigen::Vector3d centre =
+      0.5 * (out.control_points.rowwise().minCoeff() + out.control_points.rowwise().maxCoeff());
+  if (opt.in_the_round) centre.x() = centre.z() = 0;
+  out.control_points.colwise() -= centre;
+
+  // measured sizes
+  out.stitch_width_cm = dims.w;
+  out.row_height_cm = dims.rh;
+  out.loop_depth_cm = dims.depth;
+  const QuadratureTable quad = simpson_table(11);
+  double stitch_len = 0;
+  int nstitch_seg = 0;
+  for (int i = 0; i < nseg; ++i)
+    if (out.piece[i] == YarnPiece::STITCH) {
+      Vector12d x;
+      for (int a = 0; a < 4; ++a) x.segment<3>(3 * a) = out.control_points.col(i + a);
+      stitch_len += segment_arclength(x, quad);
+      ++nstitch_seg;
+    }
+  out.loop_length_cm = stitch_len / nstitch_seg * k;
+  out.segments_per_turn = opt.in_the_round ? 0 : k_turn;
+  out.segments_per_tail = k_tail;
+  const MinDistance md = min_distance(out.control_points, opt.radius);
+  out.min_distance_ratio = md.ratio;
+  out.min_distance_segment_a = md.segment_a;
+  out.min_distance_segment_b = md.segment_b;
+  return out;
+}
+
+Model build_knit_model(const GeneratedKnit& knit, const Params& params, double rest_scale) {
+  ModelBuilder b;
+  b.add_yarn(knit.control_points);
+  b.set_stitches(knit.stitch);
+  for (const Glue& g : knit.glues) b.add_glue(g);
+  return b.build(params, rest_scale);
+}
+
+}  // namespace knit

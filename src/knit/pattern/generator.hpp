@@ -1,0 +1,94 @@
+#pragma once
+// Builds the initial yarn geometry of a knitted piece (MODEL.md §6): one continuous yarn
+// laid stitch by stitch from a closed-form loop curve, each stitch fitted with a fixed
+// number of cubic B-spline segments that continue C² from the control points already laid.
+//
+// Coordinates (cm): x along the course (rows run along x), y along the wale (rows stack in
+// +y), z out of the fabric (front face = +z). The flat fabric is centred at the origin; a
+// tube knitted in the round has its axis on the y axis and its front face outside.
+#include <Eigen/Core>
+#include <vector>
+
+#include "knit/model/model.hpp"
+#include "knit/pattern/pattern.hpp"
+
+namespace knit {
+
+/// Options of generate_knit. Lengths in cm; 0 means "derive from the radius". The default
+/// proportions are Crane's plain-knit loop, a little opened (see generator.cpp): for
+/// r = 0.125 cm a stitch is 0.98 cm wide, rows are 0.74 cm apart, yarns that cross are
+/// 0.44 cm apart in z (loop_depth) and a plain loop uses about 4.1 cm of yarn.
+struct KnitOptions {
+  int rows = 6;                 ///< courses (rows) of the piece
+  int cols = 6;                 ///< stitches per row (around the tube when in_the_round)
+  int segments_per_stitch = 8;  ///< spline segments fitted to each stitch (≥ 4)
+  bool in_the_round = false;    ///< knit a tube (helix, no turns) instead of a flat piece
+  double radius = 0.125;        ///< yarn radius r (cm)
+  /// "Stitch size": yarn length per stitch (cm), the one knob a knitter turns by changing
+  /// needles. When > 0 it scales the stitch width and row height together (the depth stays
+  /// tied to the yarn) so that a plain (stockinette) loop uses this much yarn.
+  double stitch_size_cm = 0;
+  double stitch_width_cm = 0;  ///< course spacing of the loops (cm), 0 = default
+  double row_height_cm = 0;    ///< wale spacing of the rows (cm), 0 = default
+  double loop_depth_cm = 0;    ///< z distance between yarns where they cross (cm), 0 = default
+};
+
+/// What part of the yarn a segment belongs to.
+enum class YarnPiece {
+  STITCH,  ///< the loop of one stitch (sinker to sinker)
+  TURN,    ///< the arc at the end of a row where a flat piece doubles back
+  TAIL,    ///< the free start or end, looped back behind the fabric and glued
+};
+
+/// The generated yarn. Segment i is shaped by control points i … i+3.
+struct GeneratedKnit {
+  Eigen::Matrix3Xd control_points;  ///< one yarn (cm)
+  std::vector<StitchCoord> stitch;  ///< per segment; every segment has a stitch (turns
+                                    ///< belong half to each row's edge stitch, tails to the
+                                    ///< stitch they enter)
+  std::vector<YarnPiece> piece;     ///< per segment
+  std::vector<Glue> glues;          ///< each free end glued to its closest yarn point
+                                    ///< (segment indices local to this yarn)
+  double stitch_width_cm = 0;
+  double row_height_cm = 0;
+  double loop_depth_cm = 0;
+  double loop_length_cm = 0;  ///< mean yarn length of one stitch's segments
+  /// min over non-neighbouring segment pairs (|i − j| > 1) of the distance between their
+  /// contact points (10 per segment, midpoint rule) divided by 2r; ≥ 1: no overlap.
+  double min_distance_ratio = 0;
+  int min_distance_segment_a = -1, min_distance_segment_b = -1;  ///< where it occurs
+  /// gap |y(a) − y(b)| of each glue as generated (cm): the ends lie against the fabric,
+  /// about one yarn diameter from the point they are glued to.
+  std::vector<double> glue_gap_cm;
+  int segments_per_turn = 0;
+  int segments_per_tail = 0;
+
+  int num_segments() const { return static_cast<int>(stitch.size()); }
+};
+
+/// Lays out `pattern` tiled to options.rows × options.cols (pattern row 0 at the bottom,
+/// column 0 at the left as seen from the front). Segment count: rows·cols·k stitches,
+/// plus segments_per_turn for each of the rows − 1 turns of a flat piece, plus
+/// segments_per_tail at each end; control points = segments + 3. Throws
+/// std::invalid_argument naming the option on bad input.
+GeneratedKnit generate_knit(const Pattern& pattern, const KnitOptions& options);
+
+/// A model holding the knit as its only yarn, with its stitch coordinates and glues.
+Model build_knit_model(const GeneratedKnit& knit, const Params& params, double rest_scale = 1.0);
+
+/// Closest approach between non-neighbouring segments of one yarn.
+struct MinDistance {
+  double ratio = 0;  ///< distance / (2 r)
+  int segment_a = -1, segment_b = -1;
+};
+
+/// min over pairs of segments with |i − j| > 1 of the distance between their contact
+/// points (`points_per_segment`, midpoint rule), divided by 2·radius. Uses a uniform grid
+/// hash (cells of 3r); when no pair is closer than a cell it falls back to all pairs.
+MinDistance min_distance(const Eigen::Matrix3Xd& control_points, double radius,
+                         int points_per_segment = 10);
+/// The same by testing every pair (the slow oracle for tests).
+MinDistance min_distance_brute_force(const Eigen::Matrix3Xd& control_points, double radius,
+                                     int points_per_segment = 10);
+
+}  // namespace knit

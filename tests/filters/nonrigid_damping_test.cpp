@@ -1,0 +1,237 @@
+#include "knit/filters/nonrigid_damping.hpp"
+
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <Eigen/Dense>
+#include <random>
+
+#include "knit/pattern/generator.hpp"
+
+namespace knit {
+namespace {
+
+Model swatch(int rows = 4, int cols = 4) {
+  KnitOptions o;
+  o.rows = rows;
+  o.cols = cols;
+  return build_knit_model(generate_knit(builtin_pattern("stockinette"), o), Params{});
+}
+
+Eigen::VectorXd positions(const Model& m) {
+  KnitOptions o;
+  o.rows = o.cols = 4;
+  const GeneratedKnit g = generate_knit(builtin_pattern("stockinette"), o);
+  return Eigen::Map<const Eigen::VectorXd>(g.control_points.data(), g.control_points.size());
+}
+
+Eigen::VectorXd rigid_velocity(const Eigen::VectorXd& q, const Eigen::Vector3d& vel,
+                               const Eigen::Vector3d& omega) {
+  Eigen::VectorXd v(q.size());
+  for (int k = 0; k < q.size() / 3; ++k)
+    v.segment<3>(3 * k) = vel + omega.cross(q.segment<3>(3 * k));
+  return v;
+}
+
+Eigen::VectorXd random_velocity(int n, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g(0, 10);
+  Eigen::VectorXd v(n);
+  for (int i = 0; i < n; ++i) v[i] = g(rng);
+  return v;
+}
+
+RegionList everything(const Model& m) {
+  RegionList r(1);
+  for (int i = 0; i < m.num_seg(); ++i) r[0].push_back(i);
+  return r;
+}
+
+// lumped-mass momenta of the control points
+Eigen::Vector3d linear_momentum(const Model& m, const Eigen::VectorXd& v) {
+  Eigen::Vector3d p = Eigen::Vector3d::Zero();
+  for (int k = 0; k < m.num_cp(); ++k) p += m.mass[k] * v.segment<3>(3 * k);
+  return p;
+}
+Eigen::Vector3d angular_momentum(const Model& m, const Eigen::VectorXd& q,
+                                 const Eigen::VectorXd& v) {
+  Eigen::Vector3d l = Eigen::Vector3d::Zero();
+  for (int k = 0; k < m.num_cp(); ++k)
+    l += m.mass[k] * q.segment<3>(3 * k).cross(v.segment<3>(3 * k));
+  return l;
+}
+
+// mass-weighted squared distance of sample velocities from their best rigid fit
+double nonrigid_residual(const SampleSegments& s, const Eigen::Matrix3Xd& x,
+                         const Eigen::Matrix3Xd& u) {
+  double mass = 0;
+  Eigen::Vector3d cx = Eigen::Vector3d::Zero(), p = Eigen::Vector3d::Zero();
+  for (int i = 0; i < s.num_samples(); ++i)
+    mass += s.mass(i), cx += s.mass(i) * x.col(i), p += s.mass(i) * u.col(i);
+  cx /= mass;
+  const Eigen::Vector3d vc = p / mass;
+  Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d l = Eigen::Vector3d::Zero();
+  for (int i = 0; i < s.num_samples(); ++i) {
+    const Eigen::Vector3d d = x.col(i) - cx;
+    l += s.mass(i) * d.cross(u.col(i) - vc);
+    inertia += s.mass(i) * (d.squaredNorm() * Eigen::Matrix3d::Identity() - d * d.transpose());
+  }
+  const Eigen::Vector3d w = inertia.ldlt().solve(l);
+  double r = 0;
+  for (int i = 0; i < s.num_samples(); ++i)
+    r += s.mass(i) * (u.col(i) - vc - w.cross(x.col(i) - cx)).squaredNorm();
+  return r;
+}
+
+TEST(Filter, SampleMassesMatchTheLumpedMass) {
+  const Model m = swatch();
+  const SampleSegments s(m, 8);
+  double total = 0;
+  for (double w : s.masses()) total += w;
+  EXPECT_NEAR(total, m.mass.sum(), 1e-12 * m.mass.sum());
+  // also after the relaxation shrink, which changes rest lengths but not masses
+  const Model shrunk = scale_rest_lengths(m, 0.935);
+  const SampleSegments s2(shrunk, 8);
+  total = 0;
+  for (double w : s2.masses()) total += w;
+  EXPECT_NEAR(total, m.mass.sum(), 1e-12 * m.mass.sum());
+  // a uniform Δv moves the momentum by exactly Σ m_s Δv
+  Eigen::VectorXd v = Eigen::VectorXd::Zero(m.num_dof());
+  Eigen::Matrix3Xd dv(3, s.num_samples());
+  dv.colwise() = Eigen::Vector3d(1, -2, 3);
+  s.apply(m, dv, v);
+  EXPECT_LT((linear_momentum(m, v) - total * Eigen::Vector3d(1, -2, 3)).norm(), 1e-12 * total * 4);
+}
+
+TEST(Filter, RigidMotionIsLeftAlone) {
+  const Model m = swatch();
+  const Eigen::VectorXd q = positions(m);
+  const Eigen::VectorXd v0 = rigid_velocity(q, {3, -1, 2}, {0.5, 2, -1});
+  NonRigidDampingFilter single(m, everything(m), 1.0);
+  NonRigidDampingFilter two_pass(m, 0.7, 0.4);
+  for (VelocityFilter* f :
+       {static_cast<VelocityFilter*>(&single), static_cast<VelocityFilter*>(&two_pass)}) {
+    Eigen::VectorXd v = v0;
+    f->apply(m, q, v, 0.0);
+    EXPECT_LT((v - v0).norm(), 1e-11 * v0.norm()) << f->name();
+  }
+  EXPECT_EQ(two_pass.name(), "nonrigid_damping");
+}
+
+// With α = 1 and one region, the filter asks every sample for exactly the region's rigid
+// velocity; the impulses then pass through the B-spline basis and the lumped mass, which
+// smooth them, so the samples end much closer to rigid but not exactly, and repeating the
+// filter converges to rigid motion (a fixed point: the non-rigid part keeps shrinking).
+TEST(Filter, AlphaOneMakesTheMotionRigid) {
+  const Model m = swatch();
+  const Eigen::VectorXd q = positions(m);
+  NonRigidDampingFilter f(m, everything(m), 1.0);
+  const SampleSegments& s = f.samples();
+  const Eigen::Matrix3Xd x = s.positions(m, q);
+  for (const bool smooth : {true, false}) {
+    Eigen::VectorXd v(m.num_dof());
+    if (smooth) {  // a bending and shearing field, smooth along the yarn
+      for (int k = 0; k < m.num_cp(); ++k) {
+        const Eigen::Vector3d p = q.segment<3>(3 * k);
+        v.segment<3>(3 * k) = Eigen::Vector3d(p.y() * p.y(), 0.5 * p.x(), p.x() * p.y());
+      }
+    } else {  // noise on every control point
+      v = random_velocity(m.num_dof(), 7);
+    }
+    const double before = nonrigid_residual(s, x, s.velocities(m, v));
+    f.apply(m, q, v, 0.0);
+    const double once = nonrigid_residual(s, x, s.velocities(m, v));
+    EXPECT_LT(once, (smooth ? 0.05 : 0.5) * before) << (smooth ? "smooth" : "noise");
+    double last = once;
+    for (int it = 0; it < 30; ++it) {
+      f.apply(m, q, v, 0.0);
+      const double now = nonrigid_residual(s, x, s.velocities(m, v));
+      EXPECT_LE(now, last * (1 + 1e-12));
+      last = now;
+    }
+    EXPECT_LT(last, 1e-3 * before) << (smooth ? "smooth" : "noise");
+  }
+}
+
+TEST(Filter, MomentumIsConservedForAnyAlphaAndOverlap) {
+  const Model m = swatch(5, 6);
+  KnitOptions o;
+  o.rows = 5;
+  o.cols = 6;
+  const GeneratedKnit g = generate_knit(builtin_pattern("stockinette"), o);
+  const Eigen::VectorXd q =
+      Eigen::Map<const Eigen::VectorXd>(g.control_points.data(), g.control_points.size());
+  const Eigen::VectorXd v0 = random_velocity(m.num_dof(), 11);
+  const Eigen::Vector3d p0 = linear_momentum(m, v0), l0 = angular_momentum(m, q, v0);
+  const double p_scale = linear_momentum(m, v0.cwiseAbs()).norm();
+  const double l_scale = p_scale * q.cwiseAbs().maxCoeff();
+  NonRigidDampingFilter one(m, everything(m), 0.37);
+  NonRigidDampingFilter overlapping(m, 0.65, 0.3);
+  NonRigidDampingFilter small_only(m, small_stitch_regions(m), 0.8);
+  for (VelocityFilter* f :
+       {static_cast<VelocityFilter*>(&one), static_cast<VelocityFilter*>(&overlapping),
+        static_cast<VelocityFilter*>(&small_only)}) {
+    Eigen::VectorXd v = v0;
+    f->apply(m, q, v, 0.0);
+    EXPECT_GT((v - v0).norm(), 1e-3 * v0.norm());  // it did something
+    EXPECT_LT((linear_momentum(m, v) - p0).norm(), 1e-12 * p_scale);
+    EXPECT_LT((angular_momentum(m, q, v) - l0).norm(), 1e-12 * l_scale);
+  }
+}
+
+TEST(Filter, RegionsFromStitchCoordinates) {
+  const Model m = swatch(6, 6);
+  const RegionList small = small_stitch_regions(m);
+  EXPECT_EQ(small.size(), 36u);  // one per stitch
+  // every stitch segment is in its own region and in the region of the stitch above
+  std::vector<int> count(m.num_seg(), 0);
+  for (const auto& r : small)
+    for (int i : r) ++count[i];
+  for (int i = 0; i < m.num_seg(); ++i)
+    EXPECT_EQ(count[i], m.stitch[i].row == 5 ? 1 : 2) << "segment " << i;
+  // large 4×4 blocks every 2 stitches: each stitch in 2 × 2 blocks
+  const RegionList large = large_stitch_regions(m);
+  EXPECT_EQ(large.size(), 16u);
+  count.assign(m.num_seg(), 0);
+  for (const auto& r : large)
+    for (int i : r) ++count[i];
+  for (int i = 0; i < m.num_seg(); ++i) EXPECT_EQ(count[i], 4) << "segment " << i;
+}
+
+TEST(Filter, SegmentsWithoutStitchesAreUntouched) {
+  ModelBuilder b;
+  Eigen::Matrix3Xd cp(3, 12);
+  for (int k = 0; k < 12; ++k) cp.col(k) = Eigen::Vector3d(k, 0.1 * k * k, 0);
+  b.add_yarn(cp);
+  const Model m = b.build(Params{});
+  const Eigen::VectorXd q = Eigen::Map<const Eigen::VectorXd>(cp.data(), cp.size());
+  NonRigidDampingFilter f(m, 0.7, 0.3);
+  Eigen::VectorXd v = random_velocity(m.num_dof(), 3);
+  const Eigen::VectorXd v0 = v;
+  f.apply(m, q, v, 0.0);
+  EXPECT_EQ(v, v0);
+  EXPECT_THROW(NonRigidDampingFilter(m, RegionList{{0, 99}}, 0.5), std::out_of_range);
+  EXPECT_THROW(NonRigidDampingFilter(m, RegionList{{0}}, 1.5), std::invalid_argument);
+}
+
+TEST(Filter, ResultDoesNotDependOnThreadCount) {
+  const Model m = swatch(4, 6);
+  KnitOptions o;
+  o.rows = 4;
+  o.cols = 6;
+  const GeneratedKnit g = generate_knit(builtin_pattern("stockinette"), o);
+  const Eigen::VectorXd q =
+      Eigen::Map<const Eigen::VectorXd>(g.control_points.data(), g.control_points.size());
+  NonRigidDampingFilter f(m, 0.6, 0.3);
+  Eigen::VectorXd a = random_velocity(m.num_dof(), 5), b = a;
+  {
+    tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+    f.apply(m, q, a, 0.0);
+  }
+  f.apply(m, q, b, 0.0);
+  EXPECT_EQ(a, b);
+}
+
+}  // namespace
+}  // namespace knit
