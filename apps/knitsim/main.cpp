@@ -10,6 +10,7 @@ int main(int argc, char** argv) {
   CLI::App app{"knitsim " KNIT_VERSION " — yarn-level simulation of knitted cloth"};
   app.require_subcommand(1);
   knitsim::register_simulate(app);
+  knitsim::register_relax(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

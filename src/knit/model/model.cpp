@@ -1,5 +1,6 @@
 #include "knit/model/model.hpp"
 
+#include <algorithm>
 #include <stdexcept>
 #include <string>
 
@@ -123,6 +124,15 @@ Model ModelBuilder::build(const Params& params, double rest_scale) const {
   }
   m.pins = m_pins;
   m.glues = m_glues;
+  for (const Glue& g : m_glues) {
+    const int k = GLUE_CONTACT_EXCLUSION;
+    for (int i = std::max(0, g.a.segment - k); i <= std::min(seg - 1, g.a.segment + k); ++i)
+      for (int j = std::max(0, g.b.segment - k); j <= std::min(seg - 1, g.b.segment + k); ++j)
+        if (i != j) m.contact_exclusions.emplace_back(std::min(i, j), std::max(i, j));
+  }
+  std::sort(m.contact_exclusions.begin(), m.contact_exclusions.end());
+  m.contact_exclusions.erase(std::unique(m.contact_exclusions.begin(), m.contact_exclusions.end()),
+                             m.contact_exclusions.end());
   return m;
 }
 

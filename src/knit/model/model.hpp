@@ -70,13 +70,27 @@ class Model {
   int num_seg() const { return static_cast<int>(seg_cp.size()); }
   int num_dof() const { return 3 * num_cp(); }
   bool has_stitches() const;
-  /// true when segments i and j are on the same yarn with |i − j| ≤ 1 (no contact).
+  /// Segment pairs (i < j, sorted) that do not interact through contact although they are
+  /// not neighbours: the segments around each glue (GLUE_CONTACT_EXCLUSION on each side of
+  /// both glued points). A glued yarn end is tied into the fabric, and the point it is glued
+  /// to lies on another piece of yarn: contact there would fight the glue.
+  std::vector<std::pair<int, int>> contact_exclusions;
+
+  /// true when segments i and j do not interact through contact: the same yarn with
+  /// |i − j| ≤ 1, or a pair in contact_exclusions.
   bool neighbours(int i, int j) const {
-    return seg_yarn[i] == seg_yarn[j] && std::abs(i - j) <= 1;
+    if (seg_yarn[i] == seg_yarn[j] && std::abs(i - j) <= 1) return true;
+    if (contact_exclusions.empty()) return false;
+    return std::binary_search(contact_exclusions.begin(), contact_exclusions.end(),
+                              std::pair<int, int>(std::min(i, j), std::max(i, j)));
   }
   /// Total yarn rest length (cm).
   double total_length() const;
 };
+
+/// Segments on each side of a glued point that are kept out of contact with the other
+/// glued point's segments.
+inline constexpr int GLUE_CONTACT_EXCLUSION = 2;
 
 /// Builds a Model from control points; rest lengths are the initial arclengths
 /// (measured with the model's own quadrature, so C_i = 0 initially).

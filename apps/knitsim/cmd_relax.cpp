@@ -1,0 +1,119 @@
+// knitsim relax PATTERN --rows R --cols C --out DIR
+// Builds the interlocked yarn of a knit pattern and relaxes it to rest (MODEL.md §6).
+#include <filesystem>
+#include <iostream>
+#include <memory>
+
+#include "commands.hpp"
+#include "common.hpp"
+#include "knit/analysis/fabric_shape.hpp"
+#include "knit/filters/nonrigid_damping.hpp"
+#include "knit/io/state_file.hpp"
+#include "knit/pattern/generator.hpp"
+#include "knit/pattern/pattern.hpp"
+#include "knit/solver/relaxation.hpp"
+
+namespace knitsim {
+
+void register_relax(CLI::App& app) {
+  struct Opts {
+    std::string pattern, out;
+    knit::KnitOptions knit;
+    knit::RelaxOptions relax;
+    int threads = 0;
+    int contact_points = 10;
+    double shrink = knit::RELAX_SHRINK;
+    bool quiet = false, no_frames = false;
+  };
+  auto o = std::make_shared<Opts>();
+  o->knit.rows = 12;
+  o->knit.cols = 12;
+  CLI::App* cmd = app.add_subcommand(
+      "relax", "build a knit pattern's interlocked yarn and relax it to rest");
+  cmd->add_option("pattern", o->pattern,
+                  "built-in pattern (stockinette, garter, rib2x2, rib1x1, seed, "
+                  "reverse_stockinette) or a chart file (k/p per stitch, last line = row 0)")
+      ->required();
+  cmd->add_option("--out,-o", o->out, "output directory")->required();
+  cmd->add_option("--rows", o->knit.rows, "rows (courses)")->check(CLI::PositiveNumber);
+  cmd->add_option("--cols", o->knit.cols, "stitches per row")->check(CLI::PositiveNumber);
+  cmd->add_option("--segments-per-stitch", o->knit.segments_per_stitch, "spline segments per stitch")
+      ->check(CLI::Range(4, 64));
+  cmd->add_flag("--round", o->knit.in_the_round, "knit in the round (a tube)");
+  cmd->add_option("--stitch-size", o->knit.stitch_size_cm,
+                  "yarn length per stitch before shrinking (cm; 0 = default for the yarn)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--contact-points", o->contact_points, "contact quadrature points per segment")
+      ->check(CLI::Range(1, 64));
+  cmd->add_option("--shrink", o->shrink, "rest-length shrink factor c")->check(CLI::Range(0.5, 1.0));
+  cmd->add_option("--time-step", o->relax.time_step, "s")->check(CLI::PositiveNumber);
+  cmd->add_option("--max-time", o->relax.max_time, "simulated seconds at most")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--ke-threshold", o->relax.ke_per_length,
+                  "rest when kinetic energy per yarn length falls below (erg/cm)")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--check-every", o->relax.check_every, "steps between rest checks and states")
+      ->check(CLI::PositiveNumber);
+  add_threads_option(cmd, o->threads);
+  cmd->add_flag("--no-frames", o->no_frames, "write only the initial and relaxed states");
+  cmd->add_flag("--quiet,-q", o->quiet, "no progress line");
+  cmd->callback([o]() {
+    namespace fs = std::filesystem;
+    // everything is validated before anything is written
+    const knit::Pattern pattern = knit::load_pattern(o->pattern);
+    const knit::GeneratedKnit knit = knit::generate_knit(pattern, o->knit);
+    knit::Params params = knit::Params::relaxation();
+    params.gravity.setZero();  // the sample relaxes in free space
+    params.contact_points = o->contact_points;
+    const knit::Model model = knit::build_knit_model(knit, params, o->shrink);
+    auto control = make_thread_control(o->threads);
+
+    knit::State state;
+    state.q = Eigen::Map<const Eigen::VectorXd>(knit.control_points.data(), knit.control_points.size());
+    state.v = Eigen::VectorXd::Zero(state.q.size());
+    fs::create_directories(o->out);
+    knit::write_state_file((fs::path(o->out) / "initial.kstate").string(),
+                           knit::make_state_file(model, state));
+    const knit::FabricShape initial = knit::measure_fabric(model, state.q);
+
+    knit::Simulator sim(model);
+    sim.add_filter(std::make_unique<knit::NonRigidDampingFilter>(model, params.alpha_small,
+                                                                 params.alpha_large));
+    o->relax.out_dir = o->out;
+    o->relax.progress = !o->quiet;
+    o->relax.write_frames = !o->no_frames;
+    nlohmann::json extra = {
+        {"pattern", o->pattern},
+        {"rows", o->knit.rows},
+        {"cols", o->knit.cols},
+        {"in_the_round", o->knit.in_the_round},
+        {"segments_per_stitch", o->knit.segments_per_stitch},
+        {"shrink", o->shrink},
+        {"contact_points", o->contact_points},
+        {"generated",
+         {{"stitch_width_cm", knit.stitch_width_cm},
+          {"row_height_cm", knit.row_height_cm},
+          {"loop_depth_cm", knit.loop_depth_cm},
+          {"loop_length_cm", knit.loop_length_cm},
+          {"min_distance_ratio", knit.min_distance_ratio},
+          {"shape", knit::to_json(initial)}}}};
+    const knit::RunReport report = knit::relax(
+        sim, state, o->relax, extra,
+        [&](knit::Simulator&, const knit::State& st, nlohmann::json& summary) {
+          const nlohmann::json shape = knit::to_json(knit::measure_fabric(model, st.q));
+          for (const auto& [k, v] : shape.items()) summary[k] = v;
+        });
+    fs::copy_file(fs::path(o->out) / "final.kstate", fs::path(o->out) / "relaxed.kstate",
+                  fs::copy_options::overwrite_existing);
+    print_report(report, o->out);
+    const auto& s = report.summary;
+    std::cout << "relaxed " << o->pattern << " " << o->knit.rows << "x" << o->knit.cols << ": "
+              << (s["relaxed"].get<bool>() ? "at rest" : "time limit reached before rest")
+              << "; course " << s["course_extent_cm"].get<double>() << " cm, wale "
+              << s["wale_extent_cm"].get<double>() << " cm, edge curl "
+              << s["edge_curl"].get<double>() << "\n";
+    if (report.status != knit::StepStatus::OK) throw RunFailed();
+  });
+}
+
+}  // namespace knitsim
