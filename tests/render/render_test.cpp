@@ -6,6 +6,7 @@
 #include <fstream>
 
 #include "io/test_states.hpp"
+#include "knit/io/process.hpp"
 #include "knit/io/states.hpp"
 #include "knit/spline/fit.hpp"
 
@@ -140,6 +141,55 @@ TEST(RenderImage, PngLabelsAndComposition) {
   in.read(sig, 8);
   EXPECT_EQ(std::string(sig + 1, 3), "PNG");
   EXPECT_FALSE(std::filesystem::exists(path + ".tmp"));
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace knit
+
+namespace knit {
+namespace {
+
+TEST(RenderCli, SequencesAndComparisons) {
+  const auto dir = test::temp_dir("render-cli");
+  std::filesystem::create_directories(dir / "states");
+  for (int f = 0; f < 2; ++f) {
+    StateFile s = test::helix_state(0.1 * f);
+    s.state.q.array() *= 1 + 0.2 * f;
+    write_state_file((dir / "states" / ("s" + std::to_string(f) + ".kstate")).string(), s);
+  }
+  std::string msg;
+  auto run = [&](std::vector<std::string> args) {
+    args.insert(args.begin(), KNIT_APP);
+    return run_process(args, msg);
+  };
+  const std::vector<std::string> quick = {"--size",    "64x48", "--spp",         "1",
+                                          "--ao-rays", "1",     "--shadow-rays", "1"};
+  auto with = [&](std::vector<std::string> args) {
+    args.insert(args.end(), quick.begin(), quick.end());
+    return args;
+  };
+  EXPECT_EQ(run(with({"render", (dir / "states" / "s0.kstate").string(), "--out",
+                      (dir / "one.png").string(), "--view", "iso"})),
+            0)
+      << msg;
+  EXPECT_TRUE(std::filesystem::exists(dir / "one.png"));
+  EXPECT_EQ(run(with({"render", (dir / "states").string(), "--out", (dir / "frames").string()})), 0)
+      << msg;
+  EXPECT_TRUE(std::filesystem::exists(dir / "frames" / "frame_0000.png"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "frames" / "frame_0001.png"));
+  if (!find_executable("ffmpeg").empty())
+    EXPECT_TRUE(std::filesystem::exists(dir / "frames" / "animation.mp4"));
+  EXPECT_EQ(run(with({"render", "--compare", (dir / "states" / "s0.kstate").string(),
+                      (dir / "states" / "s1.kstate").string(), "--labels", "before,after", "--out",
+                      (dir / "cmp.png").string()})),
+            0)
+      << msg;
+  EXPECT_TRUE(std::filesystem::exists(dir / "cmp.png"));
+  EXPECT_EQ(run({"render", (dir / "states" / "s0.kstate").string(), "--out",
+                 (dir / "x.png").string(), "--size", "12"}),
+            1);
+  EXPECT_NE(msg.find("knitsim: error: --size 12"), std::string::npos) << msg;
   std::filesystem::remove_all(dir);
 }
 

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
@@ -18,6 +19,12 @@ std::string lower_extension(const std::string& path) {
   std::transform(ext.begin(), ext.end(), ext.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return ext;
+}
+
+std::string short_number(double v) {
+  std::ostringstream ss;
+  ss << std::setprecision(4) << v;
+  return ss.str();
 }
 
 std::string read_whole_file(const std::string& path) {
@@ -76,8 +83,8 @@ std::vector<ImportedYarn> fit_yarns(const std::vector<RawYarn>& yarns, const Imp
         options.segments_per_cm > 0 ? options.segments_per_cm : 1.0 / (2.5 * yarn.radius);
     const double want = std::round(length * per_cm);
     if (!(want <= options.max_segments))
-      throw std::runtime_error(which + " would need " + std::to_string(want) +
-                               " spline segments (length " + std::to_string(length) +
+      throw std::runtime_error(which + " would need " + short_number(want) +
+                               " spline segments (length " + short_number(length) +
                                " cm), more than the limit of " +
                                std::to_string(options.max_segments));
     const int segments = std::max(1, static_cast<int>(want));

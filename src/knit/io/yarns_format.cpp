@@ -87,13 +87,17 @@ std::vector<RawYarn> parse_yarns_file(std::string_view data, const std::string& 
     const float radius = r.get<float>("yarn radius");
     r.bytes(4, "yarn colour");
     const std::string which = "yarn " + std::to_string(y);
-    if (begin >= end || end > npoints)
+    if (begin >= end)
+      r.fail_at(at, which + " has an empty or reversed point range [" + std::to_string(begin) +
+                        ", " + std::to_string(end) + ")");
+    if (end > npoints)
       r.fail_at(at, which + " has point range [" + std::to_string(begin) + ", " +
                         std::to_string(end) + ") outside the " + std::to_string(npoints) +
                         " points of chunk 'f3..'");
     if (end - begin < 2) r.fail_at(at, which + " has fewer than 2 points");
     if (!(radius > 0) || !std::isfinite(radius))
-      r.fail_at(at + 8, which + " has radius " + std::to_string(radius) + " (expected > 0)");
+      r.fail_at(at + 8, which + " has radius " + std::to_string(static_cast<double>(radius)) +
+                            " (expected a finite value > 0)");
     RawYarn yarn;
     yarn.points = points.middleCols(begin, end - begin);
     yarn.radius = radius;

@@ -351,7 +351,7 @@ Image render_state(const StateFile& state, const RenderOptions& opt) {
       }
       ambient = static_cast<float>(open) / opt.ao_rays;
     }
-    Col c = albedo * (sun * direct + sky * (0.35f + 0.65f * ambient) * ambient);
+    Col c = albedo * (sun * direct + sky * (0.25f + 0.75f * ambient));
     if (hit_yarn && direct > 0) {
       // Kajiya–Kay sheen along the fibres
       const Vec3 h = (light - dir).normalized();
