@@ -38,6 +38,9 @@ void run_export(const ExportArgs& a) {
     for (const auto& f : files) {
       frames.push_back(knit::read_state_file(f));
       times.push_back(frames.back().state.time);
+      if (frames.back().yarn_cp_counts != frames.front().yarn_cp_counts)
+        throw std::runtime_error(f + ": yarn layout differs from " + files.front() +
+                                 "; one USD file needs the same yarns in every state");
     }
     bool increasing = true;
     for (size_t i = 1; i < times.size(); ++i) increasing &= times[i] > times[i - 1];

@@ -67,11 +67,13 @@ std::vector<std::string> split_labels(const std::string& s) {
 
 void render_compare(const RenderArgs& a, knit::RenderOptions o) {
   std::vector<knit::StateFile> states;
-  Eigen::AlignedBox3d box;
+  std::vector<Eigen::AlignedBox3d> boxes;
+  Eigen::Vector3d size = Eigen::Vector3d::Zero();
   for (const auto& f : a.compare) {
     states.push_back(knit::load_state(f));
     note_rows(states.back(), a, f);
-    box.extend(knit::state_bounds(states.back()));
+    boxes.push_back(knit::state_bounds(states.back()));
+    size = size.cwiseMax(boxes.back().sizes());
   }
   std::vector<std::string> labels = split_labels(a.labels);
   if (!labels.empty() && labels.size() != a.compare.size())
@@ -79,9 +81,14 @@ void render_compare(const RenderArgs& a, knit::RenderOptions o) {
                              std::to_string(a.compare.size()) + " states");
   if (labels.empty())
     for (const auto& f : a.compare) labels.push_back(fs::path(f).stem().string());
-  o.frame = box;  // one scale for every panel
+  // one scale for every panel: each is framed on a box of the largest size, centred on
+  // its own state
   std::vector<knit::Image> panels;
-  for (const auto& s : states) panels.push_back(knit::render_state(s, o));
+  for (size_t i = 0; i < states.size(); ++i) {
+    const Eigen::Vector3d c = boxes[i].center();
+    o.frame = Eigen::AlignedBox3d(c - size / 2, c + size / 2);
+    panels.push_back(knit::render_state(states[i], o));
+  }
   knit::write_png(knit::compose_side_by_side(panels, labels), a.out);
   std::cout << "wrote " << a.out << "\n";
 }

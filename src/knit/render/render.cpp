@@ -20,7 +20,7 @@ using Vec3 = Eigen::Vector3d;
 using Col = Eigen::Vector3f;
 
 constexpr double PI = 3.14159265358979323846;
-constexpr unsigned CURVES_ID = 0, BACKDROP_ID = 1;
+constexpr unsigned CURVES_ID = 0, BACKDROP_ID = 1, CAPS_ID = 2;
 
 // sRGB ↔ linear
 float srgb_to_linear(float c) {
@@ -173,7 +173,7 @@ Image render_state(const StateFile& state, const RenderOptions& opt) {
 
   // per segment: first control point (global) and colour
   const int nseg = state.num_seg();
-  std::vector<int> seg_cp(nseg);
+  std::vector<int> seg_cp(nseg), seg_yarn(nseg);
   std::vector<Col> seg_colour(nseg);
   const bool rows = opt.color_rows && !state.stitch.empty();
   {
@@ -182,6 +182,7 @@ Image render_state(const StateFile& state, const RenderOptions& opt) {
       const Col yarn_col = hex_colour(YARN_PALETTE[y % std::size(YARN_PALETTE)]);
       for (int i = 0; i + 3 < state.yarn_cp_counts[y]; ++i, ++s) {
         seg_cp[s] = cp + i;
+        seg_yarn[s] = static_cast<int>(y);
         if (rows) {
           const int row = state.stitch[s].row;
           seg_colour[s] = row < 0 ? hex_colour(OFF_FABRIC) : hex_colour(ROW_PALETTE[row % 2]);
@@ -193,7 +194,45 @@ Image render_state(const StateFile& state, const RenderOptions& opt) {
     }
   }
 
-  // scene: one round B-spline curve geometry for all yarns (+ the backdrop)
+  // a twisted-ply texture needs a frame around each yarn that varies smoothly: a
+  // reference normal parallel-transported from segment to segment, and the arclength
+  struct SegFrame {
+    Vec3 ref;
+    double s0 = 0, length = 0;
+  };
+  std::vector<SegFrame> seg_frame(nseg);
+  auto seg_point = [&](int seg, double t) -> Vec3 {
+    const Eigen::Vector4d b = bspline_basis(t);
+    Vec3 p = Vec3::Zero();
+    for (int a = 0; a < 4; ++a) p += b[a] * state.state.q.segment<3>(3 * (seg_cp[seg] + a));
+    return p;
+  };
+  auto seg_tangent = [&](int seg, double t) -> Vec3 {
+    const Eigen::Vector4d db = bspline_basis_d1(t);
+    Vec3 d = Vec3::Zero();
+    for (int a = 0; a < 4; ++a) d += db[a] * state.state.q.segment<3>(3 * (seg_cp[seg] + a));
+    return d.norm() > 0 ? Vec3(d.normalized()) : Vec3::UnitX();
+  };
+  {
+    int s = 0;
+    for (size_t y = 0; y < state.yarn_cp_counts.size(); ++y) {
+      double arclength = 0;
+      Vec3 ref, unused;
+      orthonormal_basis(seg_tangent(s, 0), ref, unused);
+      for (int i = 0; i + 3 < state.yarn_cp_counts[y]; ++i, ++s) {
+        const Vec3 t = seg_tangent(s, 0);
+        const Vec3 projected = ref - ref.dot(t) * t;
+        if (projected.norm() > 1e-9) ref = projected.normalized();
+        double len = 0;
+        for (int k = 0; k < 8; ++k)
+          len += (seg_point(s, (k + 1) / 8.0) - seg_point(s, k / 8.0)).norm();
+        seg_frame[s] = {ref, arclength, len};
+        arclength += len;
+      }
+    }
+  }
+
+  // scene: one round B-spline curve geometry for all yarns, end caps (+ the backdrop)
   EmbreeDevice dev;
   dev.scene = rtcNewScene(dev.device);
   rtcSetSceneBuildQuality(dev.scene, RTC_BUILD_QUALITY_HIGH);
@@ -213,6 +252,30 @@ Image render_state(const StateFile& state, const RenderOptions& opt) {
     for (int s = 0; s < nseg; ++s) idx[s] = static_cast<unsigned>(seg_cp[s]);
     rtcCommitGeometry(geom);
     rtcAttachGeometryByID(dev.scene, geom, CURVES_ID);
+    rtcReleaseGeometry(geom);
+  }
+  // Embree leaves the tube open at a curve's ends: close each yarn end with a sphere of
+  // the yarn radius (the exact sweep of the tube's sphere)
+  std::vector<int> cap_seg;  // segment each cap belongs to
+  {
+    const int ncap = 2 * static_cast<int>(state.yarn_cp_counts.size());
+    RTCGeometry geom = rtcNewGeometry(dev.device, RTC_GEOMETRY_TYPE_SPHERE_POINT);
+    auto* vtx = static_cast<float*>(rtcSetNewGeometryBuffer(
+        geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float), ncap));
+    int first = 0;
+    for (size_t y = 0; y < state.yarn_cp_counts.size(); ++y) {
+      const int last = first + state.yarn_cp_counts[y] - 4;
+      const Vec3 ends[2] = {seg_point(first, 0), seg_point(last, 1)};
+      for (int e = 0; e < 2; ++e) {
+        const int c = 2 * static_cast<int>(y) + e;
+        for (int d = 0; d < 3; ++d) vtx[4 * c + d] = static_cast<float>(ends[e][d]);
+        vtx[4 * c + 3] = static_cast<float>(state.yarn_radius[y]);
+        cap_seg.push_back(e == 0 ? first : last);
+      }
+      first = last + 1;
+    }
+    rtcCommitGeometry(geom);
+    rtcAttachGeometryByID(dev.scene, geom, CAPS_ID);
     rtcReleaseGeometry(geom);
   }
   if (opt.backdrop) {
@@ -309,14 +372,33 @@ Image render_state(const StateFile& state, const RenderOptions& opt) {
     if (n.dot(dir) > 0) n = -n;
     Col albedo = backdrop_colour;
     Vec3 tangent = Vec3::Zero();
-    if (rh.hit.geomID == CURVES_ID) {
+    if (rh.hit.geomID == CAPS_ID) {
+      hit_yarn = true;
+      const int seg = cap_seg[rh.hit.primID];
+      albedo = seg_colour[seg];
+      tangent = seg_tangent(seg, rh.hit.primID % 2 == 0 ? 0.0 : 1.0);
+    } else if (rh.hit.geomID == CURVES_ID) {
       hit_yarn = true;
       const unsigned seg = rh.hit.primID;
       albedo = seg_colour[seg];
-      const Eigen::Vector4d db = bspline_basis_d1(rh.hit.u);
-      for (int a = 0; a < 4; ++a)
-        tangent += db[a] * state.state.q.segment<3>(3 * (seg_cp[seg] + a));
-      if (tangent.norm() > 0) tangent.normalize();
+      tangent = seg_tangent(static_cast<int>(seg), rh.hit.u);
+      // three plies twisting around the yarn: darker grooves between them, faded out when
+      // the yarn is too thin on screen to show them without aliasing
+      const SegFrame& fr = seg_frame[seg];
+      const double r = state.yarn_radius[seg_yarn[seg]];
+      const double diameter_px = r * opt.height / (rh.ray.tfar * cam.tan_half_y);
+      const double fade = std::clamp((diameter_px - 6) / 10, 0.0, 1.0);
+      if (fade > 0) {
+        Vec3 ref = fr.ref - fr.ref.dot(tangent) * tangent;
+        if (ref.norm() > 1e-9) {
+          ref.normalize();
+          const double theta = std::atan2(n.dot(tangent.cross(ref)), n.dot(ref));
+          const double s = fr.s0 + rh.hit.u * fr.length;
+          // each ply turns once per 7.5 r of yarn (a twist angle of about 40°)
+          const double v = 0.5 + 0.5 * std::cos(3 * (theta + 2 * PI * s / (7.5 * r)));
+          albedo *= static_cast<float>(1 - 0.4 * fade * (1 - v) * (1 - v));
+        }
+      }
     }
     const Vec3 org = pos + n * eps * 4;
     // soft shadow from the area light
