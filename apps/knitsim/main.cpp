@@ -11,6 +11,9 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   knitsim::register_simulate(app);
   knitsim::register_relax(app);
+  knitsim::register_export(app);
+  knitsim::register_render(app);
+  knitsim::register_plot(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,7 +1,7 @@
 #include "knit/io/state_file.hpp"
 
-#include <cstdint>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -154,13 +154,17 @@ StateFile read_state_file(const std::string& path) {
   if (flags > 1) r.fail("unknown flags " + std::to_string(flags));
   StateFile f;
   f.state.time = r.get<double>("time");
-  if (nyarn == 0 || nyarn > r.remaining() / 12) r.fail("implausible yarn count " + std::to_string(nyarn));
+  if (nyarn == 0 || nyarn > r.remaining() / 12)
+    r.fail("implausible yarn count " + std::to_string(nyarn));
   long long total = 0;
   for (uint32_t y = 0; y < nyarn; ++y) {
     const auto n = r.get<uint32_t>("yarn control point count");
-    if (n < 4) r.fail("yarn " + std::to_string(y) + " has " + std::to_string(n) + " control points (need >= 4)");
+    if (n < 4)
+      r.fail("yarn " + std::to_string(y) + " has " + std::to_string(n) +
+             " control points (need >= 4)");
     const double radius = r.get<double>("yarn radius");
-    if (!(radius > 0) || !std::isfinite(radius)) r.fail("yarn " + std::to_string(y) + " has a bad radius");
+    if (!(radius > 0) || !std::isfinite(radius))
+      r.fail("yarn " + std::to_string(y) + " has a bad radius");
     total += n;
     if (total * 48 > static_cast<long long>(r.remaining()))
       r.fail("control point counts exceed the file size");

@@ -1,0 +1,193 @@
+// knitsim render STATE|DIR --out FILE.png|DIR [--size WxH] [--view front|back|side|iso]
+//                [--color-rows] [--spp N]
+// knitsim render --compare A B C --out F.png [--labels a,b,c]
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <stdexcept>
+
+#include "commands.hpp"
+#include "knit/io/process.hpp"
+#include "knit/io/states.hpp"
+#include "knit/render/render.hpp"
+
+namespace knitsim {
+namespace fs = std::filesystem;
+
+namespace {
+
+struct RenderArgs {
+  std::string input, out, size = "1024x768", view = "front", labels;
+  std::vector<std::string> compare;
+  bool color_rows = false;
+  int spp = 4, shadow_rays = 4, ao_rays = 4;
+  double fps = 30;
+};
+
+knit::RenderOptions options_from(const RenderArgs& a) {
+  knit::RenderOptions o;
+  int w = 0, h = 0;
+  char tail = 0;
+  if (std::sscanf(a.size.c_str(), "%dx%d%c", &w, &h, &tail) != 2 || w < 1 || h < 1 || w > 16384 ||
+      h > 16384)
+    throw std::runtime_error("--size " + a.size + ": expected WxH, e.g. 1024x768");
+  o.width = w;
+  o.height = h;
+  o.view = knit::parse_view(a.view);
+  o.color_rows = a.color_rows;
+  o.spp = a.spp;
+  o.shadow_rays = a.shadow_rays;
+  o.ao_rays = a.ao_rays;
+  return o;
+}
+
+void note_rows(const knit::StateFile& s, const RenderArgs& a, const std::string& name) {
+  if (a.color_rows && s.stitch.empty())
+    std::cerr << "knitsim: note: " << name
+              << " has no stitch rows; --color-rows falls back to colours per yarn\n";
+}
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+std::vector<std::string> split_labels(const std::string& s) {
+  std::vector<std::string> out;
+  if (s.empty()) return out;
+  size_t pos = 0;
+  while (true) {
+    const size_t c = s.find(',', pos);
+    out.push_back(s.substr(pos, c - pos));
+    if (c == std::string::npos) break;
+    pos = c + 1;
+  }
+  return out;
+}
+
+void render_compare(const RenderArgs& a, knit::RenderOptions o) {
+  std::vector<knit::StateFile> states;
+  std::vector<Eigen::AlignedBox3d> boxes;
+  Eigen::Vector3d size = Eigen::Vector3d::Zero();
+  for (const auto& f : a.compare) {
+    states.push_back(knit::load_state(f));
+    note_rows(states.back(), a, f);
+    boxes.push_back(knit::state_bounds(states.back()));
+    size = size.cwiseMax(boxes.back().sizes());
+  }
+  std::vector<std::string> labels = split_labels(a.labels);
+  if (!labels.empty() && labels.size() != a.compare.size())
+    throw std::runtime_error("--labels: " + std::to_string(labels.size()) + " labels for " +
+                             std::to_string(a.compare.size()) + " states");
+  if (labels.empty())
+    for (const auto& f : a.compare) labels.push_back(fs::path(f).stem().string());
+  // one scale for every panel: each is framed on a box of the largest size, centred on
+  // its own state
+  std::vector<knit::Image> panels;
+  for (size_t i = 0; i < states.size(); ++i) {
+    const Eigen::Vector3d c = boxes[i].center();
+    o.frame = Eigen::AlignedBox3d(c - size / 2, c + size / 2);
+    panels.push_back(knit::render_state(states[i], o));
+  }
+  knit::write_png(knit::compose_side_by_side(panels, labels), a.out);
+  std::cout << "wrote " << a.out << "\n";
+}
+
+void render_sequence(const RenderArgs& a, knit::RenderOptions o) {
+  const auto files = knit::list_state_files(a.input);
+  if (fs::exists(a.out) && !fs::is_directory(a.out))
+    throw std::runtime_error("--out " + a.out +
+                             ": rendering a directory of states writes numbered frames; give a "
+                             "directory");
+  fs::create_directories(a.out);
+  // one camera for the whole sequence: frame the union of every state's bounds
+  Eigen::AlignedBox3d box;
+  for (const auto& f : files) box.extend(knit::state_bounds(knit::read_state_file(f)));
+  o.frame = box;
+  const auto t0 = std::chrono::steady_clock::now();
+  for (size_t i = 0; i < files.size(); ++i) {
+    const knit::StateFile s = knit::read_state_file(files[i]);
+    if (i == 0) note_rows(s, a, files[i]);
+    char name[32];
+    std::snprintf(name, sizeof(name), "frame_%04zu.png", i);
+    knit::write_png(knit::render_state(s, o), (fs::path(a.out) / name).string());
+  }
+  std::cout << "wrote " << files.size() << " frames to " << a.out << " ("
+            << seconds_since(t0) / files.size() << " s per frame)\n";
+  const std::string ffmpeg = knit::find_executable("ffmpeg");
+  if (ffmpeg.empty()) {
+    std::cout << "ffmpeg is not on PATH: no movie made\n";
+    return;
+  }
+  const std::string movie = (fs::path(a.out) / "animation.mp4").string();
+  const std::string tmp = (fs::path(a.out) / "animation.tmp.mp4").string();
+  std::string messages;
+  const int rc =
+      knit::run_process({ffmpeg, "-y", "-loglevel", "error", "-framerate", std::to_string(a.fps),
+                         "-i", (fs::path(a.out) / "frame_%04d.png").string(), "-vf",
+                         "scale=trunc(iw/2)*2:trunc(ih/2)*2", "-pix_fmt", "yuv420p", tmp},
+                        messages);
+  if (rc != 0) {
+    fs::remove(tmp);
+    throw std::runtime_error(movie + ": ffmpeg failed: " + messages);
+  }
+  fs::rename(tmp, movie);
+  std::cout << "wrote " << movie << "\n";
+}
+
+void run_render(const RenderArgs& a) {
+  const knit::RenderOptions o = options_from(a);
+  if (!a.compare.empty()) {
+    if (!a.input.empty()) throw std::runtime_error("give either a state or --compare, not both");
+    render_compare(a, o);
+    return;
+  }
+  if (a.input.empty()) throw std::runtime_error("render: give a state, a directory or --compare");
+  if (fs::is_directory(a.input)) {
+    render_sequence(a, o);
+    return;
+  }
+  const knit::StateFile s = knit::load_state(a.input);
+  note_rows(s, a, a.input);
+  const auto t0 = std::chrono::steady_clock::now();
+  const knit::Image image = knit::render_state(s, o);
+  const double t = seconds_since(t0);
+  knit::write_png(image, a.out);
+  std::cout << "wrote " << a.out << " (" << o.width << "x" << o.height << ", " << s.num_seg()
+            << " segments, " << t << " s)\n";
+}
+
+}  // namespace
+
+void register_render(CLI::App& app) {
+  auto a = std::make_shared<RenderArgs>();
+  CLI::App* sub = app.add_subcommand(
+      "render", "ray-trace a state (or .yarns/.bcc/.obj), a directory of states, or a comparison");
+  sub->add_option("input", a->input, "state file or directory of .kstate files")
+      ->check(CLI::ExistingPath);
+  sub->add_option("--out,-o", a->out, "output PNG (a directory for a sequence)")->required();
+  sub->add_option("--size", a->size, "image size WxH")->capture_default_str();
+  sub->add_option("--view", a->view, "front, back, side or iso")
+      ->check(CLI::IsMember({"front", "back", "side", "iso"}))
+      ->capture_default_str();
+  sub->add_flag("--color-rows", a->color_rows, "alternate colours by stitch row");
+  sub->add_option("--spp", a->spp, "samples per pixel")
+      ->check(CLI::Range(1, 1024))
+      ->capture_default_str();
+  sub->add_option("--shadow-rays", a->shadow_rays, "soft-shadow rays per sample")
+      ->check(CLI::Range(0, 256))
+      ->capture_default_str();
+  sub->add_option("--ao-rays", a->ao_rays, "ambient-occlusion rays per sample")
+      ->check(CLI::Range(0, 256))
+      ->capture_default_str();
+  sub->add_option("--compare", a->compare, "states to place side by side")
+      ->expected(2, 64)
+      ->check(CLI::ExistingFile);
+  sub->add_option("--labels", a->labels, "comma-separated labels for --compare");
+  sub->add_option("--fps", a->fps, "frame rate of the movie made from a sequence")
+      ->check(CLI::Range(1.0, 240.0))
+      ->capture_default_str();
+  sub->callback([a] { run_render(*a); });
+}
+
+}  // namespace knitsim

@@ -1,0 +1,220 @@
+#include "knit/io/export.hpp"
+
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <stdexcept>
+
+#include "knit/io/bcc.hpp"
+#include "knit/io/states.hpp"
+
+namespace knit {
+namespace {
+
+// shortest round-trip text of a float
+void append_float(std::string& out, double value) {
+  char buf[32];
+  const auto res = std::to_chars(buf, buf + sizeof(buf), static_cast<float>(value));
+  out.append(buf, res.ptr);
+}
+
+void append_point(std::string& out, const Eigen::Vector3d& p) {
+  out += '(';
+  append_float(out, p.x());
+  out += ", ";
+  append_float(out, p.y());
+  out += ", ";
+  append_float(out, p.z());
+  out += ')';
+}
+
+void append_points(std::string& out, const Eigen::Matrix3Xd& cp) {
+  out += '[';
+  for (Eigen::Index k = 0; k < cp.cols(); ++k) {
+    if (k) out += ", ";
+    append_point(out, cp.col(k));
+  }
+  out += ']';
+}
+
+// the curve's extent: control-point box (it holds the spline) grown by the radius
+void append_extent(std::string& out, const Eigen::Matrix3Xd& cp, double radius) {
+  const Eigen::Vector3d lo = cp.rowwise().minCoeff().array() - radius;
+  const Eigen::Vector3d hi = cp.rowwise().maxCoeff().array() + radius;
+  out += '[';
+  append_point(out, lo);
+  out += ", ";
+  append_point(out, hi);
+  out += ']';
+}
+
+template <class T>
+void put(std::string& out, T value) {
+  char buf[sizeof(T)];
+  std::memcpy(buf, &value, sizeof(T));
+  out.append(buf, sizeof(T));
+}
+
+}  // namespace
+
+std::string usda_text(const std::vector<StateFile>& frames, const std::vector<double>& times) {
+  if (frames.empty()) throw std::invalid_argument("USD export: no states");
+  if (times.size() != frames.size())
+    throw std::invalid_argument("USD export: " + std::to_string(times.size()) + " times for " +
+                                std::to_string(frames.size()) + " states");
+  for (size_t f = 0; f < frames.size(); ++f) {
+    check_state_file(frames[f], "USD export: state " + std::to_string(f));
+    if (frames[f].yarn_cp_counts != frames[0].yarn_cp_counts)
+      throw std::invalid_argument("USD export: state " + std::to_string(f) +
+                                  " has a different yarn layout from state 0");
+    if (f > 0 && !(times[f] > times[f - 1]))
+      throw std::invalid_argument("USD export: times must increase (state " + std::to_string(f) +
+                                  ")");
+  }
+  const bool animated = frames.size() > 1;
+  double fps = 24;
+  if (animated) fps = static_cast<double>(frames.size() - 1) / (times.back() - times.front());
+  std::vector<std::vector<Eigen::Matrix3Xd>> cps;
+  for (const auto& f : frames) cps.push_back(yarn_control_points(f));
+
+  std::string out;
+  out += "#usda 1.0\n(\n    doc = \"knitsim " KNIT_VERSION
+         ": yarn centrelines as exact uniform cubic B-splines (cm)\"\n";
+  out += "    defaultPrim = \"Cloth\"\n    metersPerUnit = 0.01\n    upAxis = \"Z\"\n";
+  if (animated) {
+    out += "    startTimeCode = 0\n    endTimeCode = " + std::to_string(frames.size() - 1) + "\n";
+    out += "    timeCodesPerSecond = ";
+    append_float(out, fps);
+    out += "\n    framesPerSecond = ";
+    append_float(out, fps);
+    out += "\n";
+  }
+  out += ")\n\ndef Xform \"Cloth\" (\n    kind = \"component\"\n)\n{\n";
+  const StateFile& first = frames.front();
+  for (size_t y = 0; y < first.yarn_cp_counts.size(); ++y) {
+    const double r = first.yarn_radius[y];
+    out += "    def BasisCurves \"yarn_" + std::to_string(y) + "\"\n    {\n";
+    out += "        uniform token type = \"cubic\"\n";
+    out += "        uniform token basis = \"bspline\"\n";
+    out += "        uniform token wrap = \"nonperiodic\"\n";
+    out += "        int[] curveVertexCounts = [" + std::to_string(first.yarn_cp_counts[y]) + "]\n";
+    out += "        float[] widths = [";
+    append_float(out, 2 * r);
+    out += "] (\n            interpolation = \"constant\"\n        )\n";
+    out += "        point3f[] points = ";
+    append_points(out, cps[0][y]);
+    out += "\n        float3[] extent = ";
+    append_extent(out, cps[0][y], r);
+    out += "\n";
+    if (animated) {
+      out += "        point3f[] points.timeSamples = {\n";
+      for (size_t f = 0; f < frames.size(); ++f) {
+        out += "            " + std::to_string(f) + ": ";
+        append_points(out, cps[f][y]);
+        out += ",\n";
+      }
+      out += "        }\n        float3[] extent.timeSamples = {\n";
+      for (size_t f = 0; f < frames.size(); ++f) {
+        out += "            " + std::to_string(f) + ": ";
+        append_extent(out, cps[f][y], frames[f].yarn_radius[y]);
+        out += ",\n";
+      }
+      out += "        }\n";
+    }
+    out += "    }\n";
+  }
+  out += "}\n";
+  return out;
+}
+
+void export_usd(const std::vector<StateFile>& frames, const std::vector<double>& times,
+                const std::string& path) {
+  write_file_atomic(path, usda_text(frames, times));
+}
+
+std::string obj_text(const StateFile& state, int per_segment) {
+  const auto yarns = sample_yarns(state, per_segment);
+  std::string out = "# knitsim " KNIT_VERSION ": yarn centrelines as polylines, units cm\n";
+  long long base = 1;
+  for (size_t y = 0; y < yarns.size(); ++y) {
+    out += "o yarn_" + std::to_string(y) + "\n";
+    const Eigen::Matrix3Xd& p = yarns[y];
+    for (Eigen::Index k = 0; k < p.cols(); ++k) {
+      out += "v ";
+      append_float(out, p(0, k));
+      out += ' ';
+      append_float(out, p(1, k));
+      out += ' ';
+      append_float(out, p(2, k));
+      out += '\n';
+    }
+    out += 'l';
+    for (Eigen::Index k = 0; k < p.cols(); ++k) out += ' ' + std::to_string(base + k);
+    out += '\n';
+    base += p.cols();
+  }
+  return out;
+}
+
+void export_obj(const StateFile& state, const std::string& path, int per_segment) {
+  write_file_atomic(path, obj_text(state, per_segment));
+}
+
+void export_bcc(const StateFile& state, const std::string& path, int per_segment) {
+  write_file_atomic(path, bcc_polylines(sample_yarns(state, per_segment), "knitsim, units cm"));
+}
+
+std::string ply_bytes(const StateFile& state, bool binary, int per_segment) {
+  const auto yarns = sample_yarns(state, per_segment);
+  long long nv = 0, ne = 0;
+  for (const auto& p : yarns) {
+    nv += p.cols();
+    ne += p.cols() - 1;
+  }
+  std::string out = "ply\nformat ";
+  out += binary ? "binary_little_endian" : "ascii";
+  out += " 1.0\ncomment knitsim " KNIT_VERSION ": yarn centrelines, units cm\n";
+  out += "element vertex " + std::to_string(nv) + "\n";
+  out += "property float x\nproperty float y\nproperty float z\n";
+  out += "property int yarn\nproperty float radius\n";
+  out += "element edge " + std::to_string(ne) + "\n";
+  out += "property int vertex1\nproperty int vertex2\nend_header\n";
+  for (size_t y = 0; y < yarns.size(); ++y) {
+    const double r = state.yarn_radius[y];
+    for (Eigen::Index k = 0; k < yarns[y].cols(); ++k) {
+      if (binary) {
+        for (int c = 0; c < 3; ++c) put<float>(out, static_cast<float>(yarns[y](c, k)));
+        put<int32_t>(out, static_cast<int32_t>(y));
+        put<float>(out, static_cast<float>(r));
+      } else {
+        for (int c = 0; c < 3; ++c) {
+          append_float(out, yarns[y](c, k));
+          out += ' ';
+        }
+        out += std::to_string(y) + ' ';
+        append_float(out, r);
+        out += '\n';
+      }
+    }
+  }
+  long long base = 0;
+  for (const auto& p : yarns) {
+    for (Eigen::Index k = 0; k + 1 < p.cols(); ++k) {
+      const auto a = static_cast<int32_t>(base + k), b = static_cast<int32_t>(base + k + 1);
+      if (binary) {
+        put<int32_t>(out, a);
+        put<int32_t>(out, b);
+      } else {
+        out += std::to_string(a) + ' ' + std::to_string(b) + '\n';
+      }
+    }
+    base += p.cols();
+  }
+  return out;
+}
+
+void export_ply(const StateFile& state, const std::string& path, bool binary, int per_segment) {
+  write_file_atomic(path, ply_bytes(state, binary, per_segment));
+}
+
+}  // namespace knit

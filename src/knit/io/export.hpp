@@ -1,0 +1,44 @@
+#pragma once
+// Exporting states to other tools. Every writer builds the whole file in memory and
+// writes it with write_file_atomic, so an output is never half-written.
+//
+//   USD (.usda text)  exact curves: one BasisCurves prim per yarn (cubic, bspline,
+//                     nonperiodic), control points as `points`, widths = 2r; a sequence of
+//                     states becomes one file with time samples. Z up, 1 unit = 1 cm.
+//   OBJ               polylines (`v` and `l`), splines sampled densely.
+//   BCC               Cem Yuksel's binary curve collection, PL (polyline) curves.
+//   PLY               points and edges (binary little-endian or ascii), e.g. for ParaView.
+#include <string>
+#include <vector>
+
+#include "knit/io/state_file.hpp"
+
+namespace knit {
+
+/// Default number of polyline samples per spline segment for the sampled formats.
+inline constexpr int EXPORT_SAMPLES_PER_SEGMENT = 8;
+
+/// The text of a .usda file for `frames` at `times` (s, one per frame, increasing). With one
+/// frame the points are plain values; with several, time samples (time code = frame
+/// index; timeCodesPerSecond from the mean frame spacing). All frames need the same yarn
+/// layout. Throws std::invalid_argument otherwise.
+std::string usda_text(const std::vector<StateFile>& frames, const std::vector<double>& times);
+void export_usd(const std::vector<StateFile>& frames, const std::vector<double>& times,
+                const std::string& path);
+
+/// OBJ polylines: one object per yarn, `per_segment` samples per spline segment.
+std::string obj_text(const StateFile& state, int per_segment = EXPORT_SAMPLES_PER_SEGMENT);
+void export_obj(const StateFile& state, const std::string& path,
+                int per_segment = EXPORT_SAMPLES_PER_SEGMENT);
+
+/// BCC polylines (PL), one curve per yarn.
+void export_bcc(const StateFile& state, const std::string& path,
+                int per_segment = EXPORT_SAMPLES_PER_SEGMENT);
+
+/// PLY with vertex x, y, z (float), yarn (int), radius (float) and edge vertex1, vertex2.
+std::string ply_bytes(const StateFile& state, bool binary,
+                      int per_segment = EXPORT_SAMPLES_PER_SEGMENT);
+void export_ply(const StateFile& state, const std::string& path, bool binary = true,
+                int per_segment = EXPORT_SAMPLES_PER_SEGMENT);
+
+}  // namespace knit

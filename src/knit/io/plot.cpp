@@ -1,0 +1,300 @@
+#include "knit/io/plot.hpp"
+
+#include <stdlib.h>
+
+#include <charconv>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <stdexcept>
+
+#include "knit/io/process.hpp"
+#include "knit/io/state_file.hpp"
+
+namespace knit {
+namespace fs = std::filesystem;
+namespace {
+
+std::string trim(std::string_view s) {
+  const size_t b = s.find_first_not_of(" \t\r");
+  if (b == std::string_view::npos) return {};
+  const size_t e = s.find_last_not_of(" \t\r");
+  return std::string(s.substr(b, e - b + 1));
+}
+
+std::vector<std::string> split(const std::string& line) {
+  std::vector<std::string> out;
+  size_t pos = 0;
+  while (true) {
+    const size_t comma = line.find(',', pos);
+    out.push_back(trim(std::string_view(line).substr(pos, comma - pos)));
+    if (comma == std::string::npos) break;
+    pos = comma + 1;
+  }
+  return out;
+}
+
+// a gnuplot single-quoted string
+std::string quoted(const std::string& s) {
+  std::string out = "'";
+  for (char c : s) {
+    out += c;
+    if (c == '\'') out += '\'';
+  }
+  return out + "'";
+}
+
+std::string number(double v) {
+  if (!std::isfinite(v)) return "NaN";
+  char buf[32];
+  const auto res = std::to_chars(buf, buf + sizeof(buf), v);
+  return std::string(buf, res.ptr);
+}
+
+// writes the table as whitespace-separated numbers gnuplot reads without any parsing doubts
+void write_data(const CsvTable& t, const std::string& path) {
+  std::string out;
+  for (const auto& row : t.rows) {
+    for (size_t c = 0; c < row.size(); ++c) {
+      if (c) out += ' ';
+      out += number(row[c]);
+    }
+    out += '\n';
+  }
+  write_file_atomic(path, out);
+}
+
+// runs `gnuplot script`; throws with gnuplot's own messages on failure
+void run_gnuplot(const std::string& gnuplot, const std::string& script, const std::string& what) {
+  std::string messages;
+  if (run_process({gnuplot, script}, messages) != 0)
+    throw std::runtime_error(what + ": gnuplot failed: " + messages);
+}
+
+// a temporary working folder removed on scope exit
+struct TempDir {
+  fs::path path;
+  explicit TempDir(const fs::path& near) {
+    std::string tmpl = (fs::temp_directory_path() / "knitsim-plot-XXXXXX").string();
+    if (!mkdtemp(tmpl.data()))
+      throw std::runtime_error(near.string() + ": cannot create a temporary folder");
+    path = tmpl;
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path, ec);
+  }
+};
+
+const char* PREAMBLE =
+    "set terminal pngcairo size 900,540 enhanced font 'sans,11' linewidth 1.5\n"
+    "set grid lc rgb '#dddddd'\nset key top right box opaque\nset border lc rgb '#555555'\n"
+    "set style line 1 lc rgb '#2f7074' lw 2\nset style line 2 lc rgb '#b4533c' lw 2\n"
+    "set style line 3 lc rgb '#d4a03f' lw 2\nset style line 4 lc rgb '#77506f' lw 2\n"
+    "set style line 5 lc rgb '#4a6183' lw 2\nset style line 6 lc rgb '#8ba57c' lw 2\n";
+
+// one plot: `body` draws it, the PNG goes to `out` through a temporary name
+std::string plot_script(const std::string& out_tmp, const std::string& title,
+                        const std::string& body) {
+  std::string s = PREAMBLE;
+  s += "set output " + quoted(out_tmp) + "\n";
+  s += "set title " + quoted(title) + " noenhanced\n";
+  s += body;
+  s += "unset output\n";
+  return s;
+}
+
+void render_plot(const std::string& gnuplot, const TempDir& tmp, const std::string& out,
+                 const std::string& title, const std::string& body) {
+  const std::string out_tmp = out + ".tmp";
+  const std::string script = (tmp.path / (fs::path(out).stem().string() + ".gp")).string();
+  write_file_atomic(script, plot_script(out_tmp, title, body));
+  try {
+    run_gnuplot(gnuplot, script, out);
+  } catch (...) {
+    std::error_code ec;
+    fs::remove(out_tmp, ec);
+    throw;
+  }
+  std::error_code ec;
+  fs::rename(out_tmp, out, ec);
+  if (ec) throw std::runtime_error(out + ": cannot rename the plot into place: " + ec.message());
+}
+
+bool all_positive(const CsvTable& t, int col) {
+  bool any = false;
+  for (const auto& r : t.rows) {
+    if (!std::isfinite(r[col])) continue;
+    if (r[col] <= 0) return false;
+    any = true;
+  }
+  return any;
+}
+
+}  // namespace
+
+int CsvTable::column(const std::string& name, const std::string& file) const {
+  for (size_t c = 0; c < columns.size(); ++c)
+    if (columns[c] == name) return static_cast<int>(c);
+  throw std::runtime_error(file + ": line 1: missing column '" + name + "'");
+}
+
+CsvTable read_csv(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path + ": cannot open CSV file");
+  CsvTable t;
+  std::string line;
+  size_t line_no = 0;
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (trim(line).empty()) continue;
+    std::vector<std::string> cells = split(line);
+    if (t.columns.empty()) {
+      for (const auto& c : cells)
+        if (c.empty())
+          throw std::runtime_error(path + ": line " + std::to_string(line_no) +
+                                   ": empty column name in the header");
+      t.columns = std::move(cells);
+      continue;
+    }
+    if (cells.size() != t.columns.size())
+      throw std::runtime_error(path + ": line " + std::to_string(line_no) + ": " +
+                               std::to_string(cells.size()) + " values, the header names " +
+                               std::to_string(t.columns.size()) + " columns");
+    std::vector<double> row;
+    for (size_t c = 0; c < cells.size(); ++c) {
+      double v = 0;
+      const std::string& s = cells[c];
+      const auto res = std::from_chars(s.data(), s.data() + s.size(), v);
+      if (s.empty() || res.ec != std::errc() || res.ptr != s.data() + s.size())
+        throw std::runtime_error(path + ": line " + std::to_string(line_no) + ": column '" +
+                                 t.columns[c] + "': '" + s + "' is not a number");
+      row.push_back(v);
+    }
+    t.rows.push_back(std::move(row));
+  }
+  if (t.columns.empty()) throw std::runtime_error(path + ": empty CSV file (no header)");
+  if (t.rows.empty()) throw std::runtime_error(path + ": no data rows after the header");
+  return t;
+}
+
+std::string axis_label(const std::string& column) {
+  static const std::map<std::string, std::string> units = {
+      {"cm", "cm"}, {"mm", "mm"},   {"m", "m"},     {"s", "s"},     {"ms", "ms"},
+      {"g", "g"},   {"dyn", "dyn"}, {"erg", "erg"}, {"n", "N"},     {"j", "J"},
+      {"kg", "kg"}, {"hz", "Hz"},   {"pa", "Pa"},   {"rad", "rad"}, {"deg", "deg"}};
+  std::string name = column, unit;
+  const size_t us = column.rfind('_');
+  if (us != std::string::npos && us + 1 < column.size()) {
+    const auto it = units.find(column.substr(us + 1));
+    if (it != units.end()) {
+      unit = it->second;
+      name = column.substr(0, us);
+    }
+  }
+  for (char& c : name)
+    if (c == '_') c = ' ';
+  return unit.empty() ? name : name + " (" + unit + ")";
+}
+
+std::string find_gnuplot() {
+  return find_executable("gnuplot");
+}
+
+const std::vector<std::string>& log_columns() {
+  static const std::vector<std::string> cols = {
+      "time_s",        "kinetic_energy",       "potential_energy", "max_violation",
+      "contact_pairs", "min_contact_distance", "wall_s_per_step"};
+  return cols;
+}
+
+std::vector<std::string> plot_log(const std::string& dir) {
+  const std::string csv = (fs::path(dir) / "log.csv").string();
+  const CsvTable t = read_csv(csv);
+  // reorder to the log's standard column order
+  CsvTable data;
+  data.columns = log_columns();
+  std::vector<int> idx;
+  for (const auto& c : log_columns()) idx.push_back(t.column(c, csv));
+  for (const auto& r : t.rows) {
+    std::vector<double> row;
+    for (int i : idx) row.push_back(r[i]);
+    data.rows.push_back(std::move(row));
+  }
+  const std::string gnuplot = find_gnuplot();
+  if (gnuplot.empty())
+    throw std::runtime_error("plot: gnuplot is not on PATH (install the gnuplot-nox package)");
+  TempDir tmp(dir);
+  const std::string dat = (tmp.path / "log.dat").string();
+  write_data(data, dat);
+  const std::string d = quoted(dat);
+  const std::string x = "set xlabel 'time (s)'\n";
+  std::vector<std::string> written;
+  auto out = [&](const char* name) { return (fs::path(dir) / name).string(); };
+
+  render_plot(gnuplot, tmp, out("energy.png"), "Energy",
+              x +
+                  "set ylabel 'energy (erg)'\n"
+                  "plot " +
+                  d +
+                  " u 1:2 w l ls 1 t 'kinetic', '' u 1:3 w l ls 2 t 'potential', "
+                  "'' u 1:($2+$3) w l ls 5 dt 2 t 'total'\n");
+  written.push_back(out("energy.png"));
+
+  std::string viol = x + "set ylabel 'max constraint violation |C|'\n";
+  if (all_positive(data, 3)) viol += "set logscale y\nset format y '10^{%L}'\n";
+  render_plot(gnuplot, tmp, out("constraints.png"), "Constraints",
+              viol + "plot " + d + " u 1:4 w l ls 2 t 'max |C|'\n");
+  written.push_back(out("constraints.png"));
+
+  render_plot(gnuplot, tmp, out("contact.png"), "Contact",
+              x +
+                  "set ylabel 'contact pairs'\nset y2label 'min contact distance (cm)'\n"
+                  "set ytics nomirror\nset y2tics\nset key top left box opaque\n"
+                  "plot " +
+                  d +
+                  " u 1:5 w l ls 1 t 'contact pairs' axes x1y1, "
+                  "'' u 1:6 w l ls 2 t 'min contact distance (cm)' axes x1y2\n");
+  written.push_back(out("contact.png"));
+
+  render_plot(gnuplot, tmp, out("timing.png"), "Performance",
+              x +
+                  "set ylabel 'wall time per step (s)'\nset yrange [0:*]\n"
+                  "plot " +
+                  d + " u 1:7 w l ls 4 t 'wall time per step'\n");
+  written.push_back(out("timing.png"));
+  return written;
+}
+
+std::string plot_csv(const std::string& csv, const std::string& out_png) {
+  const CsvTable t = read_csv(csv);
+  if (t.columns.size() < 2)
+    throw std::runtime_error(csv + ": need at least two columns (x first, then y)");
+  const std::string gnuplot = find_gnuplot();
+  if (gnuplot.empty())
+    throw std::runtime_error("plot: gnuplot is not on PATH (install the gnuplot-nox package)");
+  const std::string out =
+      out_png.empty() ? fs::path(csv).replace_extension(".png").string() : out_png;
+  TempDir tmp(fs::path(csv).parent_path());
+  const std::string dat = (tmp.path / "data.dat").string();
+  write_data(t, dat);
+  std::string body = "set xlabel " + quoted(axis_label(t.columns[0])) + " noenhanced\n";
+  if (t.columns.size() == 2) {
+    body += "set ylabel " + quoted(axis_label(t.columns[1])) + " noenhanced\nset key off\n";
+  }
+  body += "plot ";
+  for (size_t c = 1; c < t.columns.size(); ++c) {
+    if (c > 1) body += ", ";
+    body += (c == 1 ? quoted(dat) : std::string("''")) + " u 1:" + std::to_string(c + 1) +
+            " w lp ls " + std::to_string((c - 1) % 6 + 1) + " pt 7 ps 0.5 t " +
+            quoted(axis_label(t.columns[c])) + " noenhanced";
+  }
+  body += "\n";
+  render_plot(gnuplot, tmp, out, fs::path(csv).stem().string(), body);
+  return out;
+}
+
+}  // namespace knit

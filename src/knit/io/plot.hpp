@@ -1,0 +1,42 @@
+#pragma once
+// Plots of simulation logs and measured curves, drawn by gnuplot (run as a subprocess,
+// pngcairo terminal). Outputs are written to a temporary name and renamed, so a PNG is
+// never half-written.
+#include <string>
+#include <vector>
+
+namespace knit {
+
+/// A numeric CSV table with one header line of column names.
+struct CsvTable {
+  std::vector<std::string> columns;
+  std::vector<std::vector<double>> rows;  ///< each row has columns.size() values
+  /// Index of a column; throws std::runtime_error naming `file` when it is missing.
+  int column(const std::string& name, const std::string& file) const;
+};
+
+/// Reads a numeric CSV (comma separated, header first, blank lines skipped). Throws
+/// std::runtime_error naming the file and line on malformed input.
+CsvTable read_csv(const std::string& path);
+
+/// "displacement_cm" → "displacement (cm)", "kinetic_energy" → "kinetic energy": a
+/// trailing known unit token (cm, s, g, dyn, erg, …) becomes a parenthesised unit.
+std::string axis_label(const std::string& column);
+
+/// The gnuplot executable found on PATH, or "" when there is none.
+std::string find_gnuplot();
+
+/// The columns a simulation log (DIR/log.csv) must have.
+const std::vector<std::string>& log_columns();
+
+/// Plots `dir`/log.csv into `dir`: energy.png (kinetic, potential, total; erg),
+/// constraints.png (max violation), contact.png (pairs and min distance) and timing.png
+/// (wall time per step). Returns the paths written. Throws when gnuplot is missing or
+/// the log is malformed.
+std::vector<std::string> plot_log(const std::string& dir);
+
+/// Plots every column of a CSV against its first (e.g. displacement_cm,force_dyn) into
+/// `out_png` (default: the CSV path with extension .png). Returns the path written.
+std::string plot_csv(const std::string& csv, const std::string& out_png = "");
+
+}  // namespace knit

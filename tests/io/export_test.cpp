@@ -1,0 +1,223 @@
+#include "knit/io/export.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <regex>
+#include <sstream>
+
+#include "io/test_states.hpp"
+#include "knit/io/import.hpp"
+#include "knit/io/process.hpp"
+#include "knit/io/states.hpp"
+#include "knit/spline/fit.hpp"
+
+namespace knit {
+namespace {
+
+std::string slurp(const std::filesystem::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// every "(x, y, z)" triple in `text`
+std::vector<Eigen::Vector3d> parse_triples(const std::string& text) {
+  std::vector<Eigen::Vector3d> out;
+  static const std::regex triple(R"(\(([-0-9.e+]+), ([-0-9.e+]+), ([-0-9.e+]+)\))");
+  for (auto it = std::sregex_iterator(text.begin(), text.end(), triple);
+       it != std::sregex_iterator(); ++it)
+    out.emplace_back(std::stod((*it)[1]), std::stod((*it)[2]), std::stod((*it)[3]));
+  return out;
+}
+
+// largest distance from any point of `b` to the polyline `a` (cm)
+double max_distance_to_polyline(const Eigen::Matrix3Xd& a, const Eigen::Matrix3Xd& b) {
+  double worst = 0;
+  for (Eigen::Index j = 0; j < b.cols(); ++j) {
+    double best = std::numeric_limits<double>::infinity();
+    for (Eigen::Index i = 0; i + 1 < a.cols(); ++i) {
+      const Eigen::Vector3d d = a.col(i + 1) - a.col(i);
+      const double t = std::clamp((b.col(j) - a.col(i)).dot(d) / d.squaredNorm(), 0.0, 1.0);
+      best = std::min(best, (a.col(i) + t * d - b.col(j)).norm());
+    }
+    worst = std::max(worst, best);
+  }
+  return worst;
+}
+
+TEST(ExportUsd, SingleFrameWritesTheExactCurves) {
+  const StateFile s =
+      test::state_of({test::helix_control_points(), test::helix_control_points(0.5)});
+  const std::string usda = usda_text({s}, {0.0});
+  for (const char* needle :
+       {"#usda 1.0", "upAxis = \"Z\"", "metersPerUnit = 0.01", "def BasisCurves \"yarn_0\"",
+        "def BasisCurves \"yarn_1\"", "uniform token type = \"cubic\"",
+        "uniform token basis = \"bspline\"", "uniform token wrap = \"nonperiodic\"",
+        "int[] curveVertexCounts = [27]", "float[] widths = [0.25]"})
+    EXPECT_NE(usda.find(needle), std::string::npos) << "missing: " << needle;
+  EXPECT_EQ(usda.find("timeSamples"), std::string::npos);
+  // the points are the control points themselves (float precision), not a resampling
+  const size_t at = usda.find("point3f[] points = ");
+  ASSERT_NE(at, std::string::npos);
+  const auto pts = parse_triples(usda.substr(at, usda.find('\n', at) - at));
+  ASSERT_EQ(pts.size(), 27u);
+  for (int k = 0; k < 27; ++k)
+    EXPECT_LT((pts[k] - s.state.q.segment<3>(3 * k)).norm(), 1e-6) << "control point " << k;
+}
+
+TEST(ExportUsd, SequenceBecomesTimeSamples) {
+  std::vector<StateFile> frames;
+  std::vector<double> times;
+  for (int f = 0; f < 3; ++f) {
+    StateFile s = test::helix_state(0.1 * f);
+    s.state.q.array() += f;  // moves
+    frames.push_back(s);
+    times.push_back(0.1 * f);
+  }
+  const std::string usda = usda_text(frames, times);
+  EXPECT_NE(usda.find("point3f[] points.timeSamples = {"), std::string::npos);
+  EXPECT_NE(usda.find("endTimeCode = 2"), std::string::npos);
+  EXPECT_NE(usda.find("timeCodesPerSecond = 10"), std::string::npos);
+  const size_t ts = usda.find("points.timeSamples");
+  for (int f = 0; f < 3; ++f)
+    EXPECT_NE(usda.find("            " + std::to_string(f) + ": [(", ts), std::string::npos)
+        << "frame " << f;
+  // layouts must agree and times increase
+  frames[1] = test::state_of({test::helix_control_points(1, 1, 3, 20)});
+  EXPECT_THROW(usda_text(frames, times), std::invalid_argument);
+  EXPECT_THROW(usda_text({test::helix_state(), test::helix_state()}, {1.0, 1.0}),
+               std::invalid_argument);
+}
+
+TEST(ExportUsd, BlenderImportsIt) {
+  const std::string blender = find_executable("blender");
+  if (blender.empty()) GTEST_SKIP() << "blender is not installed";
+  const auto dir = test::temp_dir("usd-blender");
+  const std::string usd = (dir / "helix.usda").string();
+  export_usd({test::helix_state()}, {0.0}, usd);
+  const std::string script =
+      "import bpy, sys\n"
+      "bpy.ops.wm.read_factory_settings(use_empty=True)\n"
+      "bpy.ops.wm.usd_import(filepath=sys.argv[-1])\n"
+      "n = len(bpy.data.objects)\n"
+      "print('imported objects:', n)\n"
+      "sys.exit(0 if n > 0 else 3)\n";
+  std::ofstream(dir / "check.py") << script;
+  std::string messages;
+  const int rc = run_process(
+      {blender, "-b", "--factory-startup", "--python", (dir / "check.py").string(), "--", usd},
+      messages);
+  EXPECT_EQ(rc, 0) << messages;
+}
+
+TEST(ExportObj, RoundTripReproducesTheCurve) {
+  const StateFile s = test::helix_state();
+  const std::string text = obj_text(s, 8);
+  EXPECT_NE(text.find("o yarn_0"), std::string::npos);
+  const auto raw = parse_obj(text, "helix.obj");
+  ASSERT_EQ(raw.size(), 1u);
+  EXPECT_EQ(raw[0].points.cols(), 24 * 8 + 1);
+  ImportOptions opt;
+  opt.segments_per_cm = 24 / polyline_length(raw[0].points);
+  const auto fitted = fit_yarns(raw, opt, "helix.obj");
+  ASSERT_EQ(fitted.size(), 1u);
+  EXPECT_EQ(fitted[0].control_points.cols(), 27);
+  EXPECT_DOUBLE_EQ(fitted[0].radius, 0.125);
+  // the refit curve stays within a small fraction of the radius of the original
+  const Eigen::Matrix3Xd original = sample_bspline(yarn_control_points(s)[0], 32);
+  const double err =
+      max_distance_to_polyline(original, sample_bspline(fitted[0].control_points, 8));
+  RecordProperty("obj_roundtrip_error_cm", std::to_string(err));
+  EXPECT_LT(err, 0.05 * 0.125);
+}
+
+TEST(ExportBcc, HeaderAndRoundTrip) {
+  const StateFile s =
+      test::state_of({test::helix_control_points(), test::helix_control_points(0.5)});
+  const auto dir = test::temp_dir("bcc");
+  export_bcc(s, (dir / "two.bcc").string(), 8);
+  const std::string bytes = slurp(dir / "two.bcc");
+  const size_t n = 24 * 8 + 1;
+  ASSERT_EQ(bytes.size(), 64 + 2 * (4 + 12 * n));
+  EXPECT_EQ(bytes.substr(0, 3), "BCC");
+  EXPECT_EQ(static_cast<unsigned char>(bytes[3]), 0x44);
+  EXPECT_EQ(bytes.substr(4, 2), "PL");
+  EXPECT_EQ(bytes[6], 3);
+  uint64_t curves, points;
+  std::memcpy(&curves, bytes.data() + 8, 8);
+  std::memcpy(&points, bytes.data() + 16, 8);
+  EXPECT_EQ(curves, 2u);
+  EXPECT_EQ(points, 2 * n);
+  const auto raw = parse_bcc(bytes, "two.bcc");
+  ASSERT_EQ(raw.size(), 2u);
+  const auto original = sample_yarns(s, 8);
+  for (int y = 0; y < 2; ++y) EXPECT_LT((raw[y].points - original[y]).cwiseAbs().maxCoeff(), 1e-6);
+  ImportOptions opt;
+  opt.segments_per_cm = 24 / polyline_length(raw[0].points);
+  const auto fitted = fit_yarns({raw[0]}, opt, "two.bcc");
+  const double err = max_distance_to_polyline(sample_bspline(yarn_control_points(s)[0], 32),
+                                              sample_bspline(fitted[0].control_points, 8));
+  EXPECT_LT(err, 0.05 * 0.125);
+}
+
+TEST(ExportPly, BinaryAndAsciiLayouts) {
+  const StateFile s = test::helix_state();
+  const long nv = 24 * 8 + 1, ne = nv - 1;
+  const std::string bin = ply_bytes(s, true, 8);
+  const size_t end = bin.find("end_header\n");
+  ASSERT_NE(end, std::string::npos);
+  EXPECT_NE(bin.find("format binary_little_endian 1.0"), std::string::npos);
+  EXPECT_NE(bin.find("element vertex " + std::to_string(nv)), std::string::npos);
+  EXPECT_NE(bin.find("element edge " + std::to_string(ne)), std::string::npos);
+  EXPECT_EQ(bin.size(), end + 11 + nv * 20 + ne * 8);
+  float x;
+  std::memcpy(&x, bin.data() + end + 11, 4);
+  EXPECT_NEAR(x, sample_yarns(s, 8)[0](0, 0), 1e-6);
+  const std::string ascii = ply_bytes(s, false, 8);
+  const std::string body = ascii.substr(ascii.find("end_header\n") + 11);
+  EXPECT_EQ(std::count(body.begin(), body.end(), '\n'), nv + ne);
+}
+
+TEST(ExportCli, FormatsFilesAndDirectories) {
+  const auto dir = test::temp_dir("export-cli");
+  for (int f = 0; f < 2; ++f)
+    write_state_file((dir / ("s" + std::to_string(f) + ".kstate")).string(),
+                     test::helix_state(0.5 * f));
+  const std::string app = KNIT_APP;
+  auto run = [&](std::vector<std::string> args, std::string& messages) {
+    args.insert(args.begin(), app);
+    return run_process(args, messages);
+  };
+  std::string msg;
+  for (const char* fmt : {"usd", "obj", "bcc", "ply"}) {
+    const std::string out = (dir / (std::string("one.") + fmt)).string();
+    EXPECT_EQ(run({"export", (dir / "s0.kstate").string(), "--format", fmt, "--out", out}, msg), 0)
+        << msg;
+    EXPECT_TRUE(std::filesystem::exists(out)) << fmt;
+  }
+  // a directory: USD gets time samples, OBJ one file per state
+  const std::string seq = (dir / "seq.usda").string();
+  std::filesystem::create_directories(dir / "states");
+  for (int f = 0; f < 2; ++f)
+    std::filesystem::copy(dir / ("s" + std::to_string(f) + ".kstate"), dir / "states");
+  EXPECT_EQ(run({"export", (dir / "states").string(), "--format", "usd", "--out", seq}, msg), 0)
+      << msg;
+  EXPECT_NE(slurp(seq).find("points.timeSamples"), std::string::npos);
+  EXPECT_EQ(run({"export", (dir / "states").string(), "--format", "obj", "--out",
+                 (dir / "objs").string()},
+                msg),
+            0)
+      << msg;
+  EXPECT_TRUE(std::filesystem::exists(dir / "objs" / "s1.obj"));
+  EXPECT_EQ(run({"export", (dir / "states").string(), "--format", "obj", "--out", seq}, msg), 1);
+  EXPECT_NE(msg.find("knitsim: error:"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("one file per state"), std::string::npos) << msg;
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace knit

@@ -1,0 +1,197 @@
+#include "knit/render/render.hpp"
+
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <fstream>
+
+#include "io/test_states.hpp"
+#include "knit/io/process.hpp"
+#include "knit/io/states.hpp"
+#include "knit/spline/fit.hpp"
+
+namespace knit {
+namespace {
+
+// distance from point p to the ray (origin o, unit direction d), for points ahead of o
+double ray_distance(const Eigen::Vector3d& o, const Eigen::Vector3d& d, const Eigen::Vector3d& p) {
+  const double t = (p - o).dot(d);
+  if (t < 0) return std::numeric_limits<double>::infinity();
+  return (p - o - t * d).norm();
+}
+
+RenderOptions tiny(View view = View::FRONT) {
+  RenderOptions o;
+  o.width = 64;
+  o.height = 48;
+  o.view = view;
+  o.spp = 4;
+  o.shadow_rays = 2;
+  o.ao_rays = 2;
+  return o;
+}
+
+TEST(RenderCamera, FramesEveryCornerInside) {
+  const Eigen::AlignedBox3d box(Eigen::Vector3d(-1, -2, 0), Eigen::Vector3d(3, 1, 0.5));
+  for (View v : {View::FRONT, View::BACK, View::SIDE, View::ISO}) {
+    const Camera cam = frame_camera(box, v, 80, 60);
+    for (int c = 0; c < 8; ++c) {
+      const Eigen::Vector3d d =
+          box.corner(static_cast<Eigen::AlignedBox3d::CornerType>(c)) - cam.eye;
+      const double depth = d.dot(cam.forward);
+      ASSERT_GT(depth, 0);
+      EXPECT_LE(std::abs(d.dot(cam.right)) / depth, cam.tan_half_x * (1 + 1e-9));
+      EXPECT_LE(std::abs(d.dot(cam.up)) / depth, cam.tan_half_y * (1 + 1e-9));
+    }
+  }
+  // a swatch in the xy plane is seen face on from +z, with +y up
+  const Camera front = frame_camera(box, View::FRONT, 80, 60);
+  EXPECT_NEAR(front.forward.z(), -1, 1e-12);
+  EXPECT_NEAR(front.up.y(), 1, 1e-12);
+  EXPECT_THROW(parse_view("top"), std::invalid_argument);
+}
+
+TEST(RenderHelix, CoversTheProjectedTube) {
+  const StateFile s = test::helix_state();
+  RenderOptions o = tiny();
+  o.backdrop = false;
+  const Image im = render_state(s, o);
+  ASSERT_EQ(im.width, 64);
+  ASSERT_EQ(im.height, 48);
+  const Camera cam = frame_camera(state_bounds(s), o.view, o.width, o.height);
+  const Eigen::Matrix3Xd line = sample_bspline(yarn_control_points(s)[0], 64);
+  // the centreline point nearest the camera is unoccluded: its pixel shows yarn, unlike
+  // the background in the corner
+  Eigen::Index nearest = 0;
+  (line.transpose() * cam.forward).minCoeff(&nearest);
+  const Eigen::Vector3d rel = line.col(nearest) - cam.eye;
+  const double depth = rel.dot(cam.forward);
+  const int px = static_cast<int>((rel.dot(cam.right) / depth / cam.tan_half_x + 1) * 32);
+  const int py = static_cast<int>((1 - rel.dot(cam.up) / depth / cam.tan_half_y) * 24);
+  ASSERT_TRUE(px >= 0 && px < 64 && py >= 0 && py < 48);
+  EXPECT_EQ(im.coverage[py * 64 + px], 1.0f) << "pixel " << px << "," << py;
+  EXPECT_GT((im.pixel(px, py) - im.pixel(0, 0)).norm(), 0.1f);
+  // slow oracle: a pixel is covered when its centre ray passes within r of the centreline
+  int oracle_hits = 0, mismatches = 0;
+  double coverage = 0;
+  for (int y = 0; y < 48; ++y)
+    for (int x = 0; x < 64; ++x) {
+      const Eigen::Vector3d d = cam.direction(x + 0.5, y + 0.5);
+      double best = std::numeric_limits<double>::infinity();
+      for (Eigen::Index k = 0; k < line.cols(); ++k)
+        best = std::min(best, ray_distance(cam.eye, d, line.col(k)));
+      const bool hit = best <= 0.125;
+      const float c = im.coverage[y * 64 + x];
+      oracle_hits += hit;
+      coverage += c;
+      // pixels the oracle is sure about (centre well inside or outside) must agree
+      if (best < 0.125 * 0.7 && c < 0.5) ++mismatches;
+      if (best > 0.125 * 1.5 && c > 0) ++mismatches;
+    }
+  const double fraction = coverage / (64 * 48);
+  RecordProperty("coverage_fraction", std::to_string(fraction));
+  EXPECT_GT(oracle_hits, 64 * 48 / 20);  // the tube is visible at this size
+  EXPECT_NEAR(coverage, oracle_hits, 0.15 * oracle_hits);
+  EXPECT_LE(mismatches, 2);
+}
+
+TEST(RenderHelix, DeterministicAcrossThreadCounts) {
+  const StateFile s = test::state_of({test::helix_control_points()}, 0.125, 0, true);
+  RenderOptions o = tiny(View::ISO);
+  o.color_rows = true;
+  const Image many = render_state(s, o);
+  Image one;
+  {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+    one = render_state(s, o);
+  }
+  EXPECT_EQ(many.rgb, one.rgb);
+}
+
+TEST(RenderHelix, AllViewsAndRowColours) {
+  const StateFile s = test::state_of({test::helix_control_points()}, 0.125, 0, true);
+  for (View v : {View::FRONT, View::BACK, View::SIDE, View::ISO}) {
+    RenderOptions o = tiny(v);
+    o.color_rows = true;
+    const Image im = render_state(s, o);
+    double cov = 0;
+    for (float c : im.coverage) cov += c;
+    EXPECT_GT(cov, 20) << "view " << static_cast<int>(v);
+  }
+  RenderOptions bad = tiny();
+  bad.spp = 0;
+  EXPECT_THROW(render_state(s, bad), std::invalid_argument);
+}
+
+TEST(RenderImage, PngLabelsAndComposition) {
+  Image a(40, 30, Eigen::Vector3f(1, 0, 0)), b(50, 30, Eigen::Vector3f(0, 0, 1));
+  const Image both = compose_side_by_side({a, b}, {"stockinette", "rib"});
+  EXPECT_EQ(both.width, 40 + 4 + 50);
+  EXPECT_GT(both.height, 30);
+  // the label strip has dark text pixels
+  int dark = 0;
+  for (int y = 30; y < both.height; ++y)
+    for (int x = 0; x < both.width; ++x) dark += both.pixel(x, y).sum() < 1.0f;
+  EXPECT_GT(dark, 10);
+  const auto dir = test::temp_dir("png");
+  const std::string path = (dir / "c.png").string();
+  write_png(both, path);
+  std::ifstream in(path, std::ios::binary);
+  char sig[8];
+  in.read(sig, 8);
+  EXPECT_EQ(std::string(sig + 1, 3), "PNG");
+  EXPECT_FALSE(std::filesystem::exists(path + ".tmp"));
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace knit
+
+namespace knit {
+namespace {
+
+TEST(RenderCli, SequencesAndComparisons) {
+  const auto dir = test::temp_dir("render-cli");
+  std::filesystem::create_directories(dir / "states");
+  for (int f = 0; f < 2; ++f) {
+    StateFile s = test::helix_state(0.1 * f);
+    s.state.q.array() *= 1 + 0.2 * f;
+    write_state_file((dir / "states" / ("s" + std::to_string(f) + ".kstate")).string(), s);
+  }
+  std::string msg;
+  auto run = [&](std::vector<std::string> args) {
+    args.insert(args.begin(), KNIT_APP);
+    return run_process(args, msg);
+  };
+  const std::vector<std::string> quick = {"--size",    "64x48", "--spp",         "1",
+                                          "--ao-rays", "1",     "--shadow-rays", "1"};
+  auto with = [&](std::vector<std::string> args) {
+    args.insert(args.end(), quick.begin(), quick.end());
+    return args;
+  };
+  EXPECT_EQ(run(with({"render", (dir / "states" / "s0.kstate").string(), "--out",
+                      (dir / "one.png").string(), "--view", "iso"})),
+            0)
+      << msg;
+  EXPECT_TRUE(std::filesystem::exists(dir / "one.png"));
+  EXPECT_EQ(run(with({"render", (dir / "states").string(), "--out", (dir / "frames").string()})), 0)
+      << msg;
+  EXPECT_TRUE(std::filesystem::exists(dir / "frames" / "frame_0000.png"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "frames" / "frame_0001.png"));
+  if (!find_executable("ffmpeg").empty())
+    EXPECT_TRUE(std::filesystem::exists(dir / "frames" / "animation.mp4"));
+  EXPECT_EQ(run(with({"render", "--compare", (dir / "states" / "s0.kstate").string(),
+                      (dir / "states" / "s1.kstate").string(), "--labels", "before,after", "--out",
+                      (dir / "cmp.png").string()})),
+            0)
+      << msg;
+  EXPECT_TRUE(std::filesystem::exists(dir / "cmp.png"));
+  EXPECT_EQ(run({"render", (dir / "states" / "s0.kstate").string(), "--out",
+                 (dir / "x.png").string(), "--size", "12"}),
+            1);
+  EXPECT_NE(msg.find("knitsim: error: --size 12"), std::string::npos) << msg;
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace knit
