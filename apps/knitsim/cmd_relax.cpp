@@ -8,6 +8,7 @@
 #include "common.hpp"
 #include "knit/analysis/fabric_shape.hpp"
 #include "knit/filters/nonrigid_damping.hpp"
+#include "knit/io/import.hpp"
 #include "knit/io/state_file.hpp"
 #include "knit/pattern/generator.hpp"
 #include "knit/pattern/pattern.hpp"
@@ -15,15 +16,57 @@
 
 namespace knitsim {
 
+namespace {
+
+// the generated yarn ends lie a yarn diameter from the points they are glued to; the gap
+// closes over this time (s) at the start of the relaxation
+constexpr double GLUE_CLOSE_TIME = 0.05;
+
+// Relaxes yarns imported from a file: no stitch coordinates, so no non-rigid damping
+// regions and no shape measures; the relaxation parameters otherwise apply unchanged.
+template <class Opts>
+void relax_imported(Opts& o) {
+  namespace fs = std::filesystem;
+  knit::Params params = knit::Params::relaxation();
+  params.gravity.setZero();
+  params.contact_points = o.contact_points;
+  if (!o.time_step_given) o.relax.time_step = 1.0 / 25000;
+  knit::ModelBuilder builder;
+  for (const knit::ImportedYarn& y : knit::import_yarns(o.from, o.import)) builder.add_yarn(y.control_points);
+  params.radius = o.import.radius;
+  const knit::Model model = builder.build(params, o.shrink);
+  auto control = make_thread_control(o.threads);
+  knit::State state;
+  state.q = builder.positions();
+  state.v = Eigen::VectorXd::Zero(state.q.size());
+  fs::create_directories(o.out);
+  knit::write_state_file((fs::path(o.out) / "initial.kstate").string(), knit::make_state_file(model, state));
+  knit::Simulator sim(model);
+  o.relax.out_dir = o.out;
+  o.relax.progress = !o.quiet;
+  o.relax.write_frames = !o.no_frames;
+  const knit::RunReport report =
+      knit::relax(sim, state, o.relax, {{"from", o.from}, {"shrink", o.shrink}, {"contact_points", o.contact_points}});
+  fs::copy_file(fs::path(o.out) / "final.kstate", fs::path(o.out) / "relaxed.kstate",
+                fs::copy_options::overwrite_existing);
+  print_report(report, o.out);
+  export_run(o.out, o.export_format);
+  if (report.status != knit::StepStatus::OK) throw RunFailed();
+}
+
+}  // namespace
+
 void register_relax(CLI::App& app) {
   struct Opts {
-    std::string pattern, out;
+    std::string pattern, out, from, export_format;
+    knit::ImportOptions import;
     knit::KnitOptions knit;
     knit::RelaxOptions relax;
     int threads = 0;
     int contact_points = 10;
     double shrink = knit::RELAX_SHRINK;
     bool quiet = false, no_frames = false;
+    bool time_step_given = false;
   };
   auto o = std::make_shared<Opts>();
   o->knit.rows = 12;
@@ -32,8 +75,12 @@ void register_relax(CLI::App& app) {
       "relax", "build a knit pattern's interlocked yarn and relax it to rest");
   cmd->add_option("pattern", o->pattern,
                   "built-in pattern (stockinette, garter, rib2x2, rib1x1, seed, "
-                  "reverse_stockinette) or a chart file (k/p per stitch, last line = row 0)")
-      ->required();
+                  "reverse_stockinette) or a chart file (k/p per stitch, last line = row 0)");
+  cmd->add_option("--from", o->from,
+                  "relax yarns imported from a .yarns, .bcc or .obj file instead of a pattern");
+  cmd->add_option("--scale", o->import.scale,
+                  "with --from: multiply coordinates (default: the file's yarn radius becomes 0.125 cm)")
+      ->check(CLI::PositiveNumber);
   cmd->add_option("--out,-o", o->out, "output directory")->required();
   cmd->add_option("--rows", o->knit.rows, "rows (courses)")->check(CLI::PositiveNumber);
   cmd->add_option("--cols", o->knit.cols, "stitches per row")->check(CLI::PositiveNumber);
@@ -46,7 +93,9 @@ void register_relax(CLI::App& app) {
   cmd->add_option("--contact-points", o->contact_points, "contact quadrature points per segment")
       ->check(CLI::Range(1, 64));
   cmd->add_option("--shrink", o->shrink, "rest-length shrink factor c")->check(CLI::Range(0.5, 1.0));
-  cmd->add_option("--time-step", o->relax.time_step, "s")->check(CLI::PositiveNumber);
+  cmd->add_option("--time-step", o->relax.time_step,
+                  "s (default 1/11800; 1/25000 with --from: imported swatches start tightly packed)")
+      ->check(CLI::PositiveNumber);
   cmd->add_option("--max-time", o->relax.max_time, "simulated seconds at most")
       ->check(CLI::PositiveNumber);
   cmd->add_option("--ke-threshold", o->relax.ke_per_length,
@@ -57,7 +106,12 @@ void register_relax(CLI::App& app) {
   add_threads_option(cmd, o->threads);
   cmd->add_flag("--no-frames", o->no_frames, "write only the initial and relaxed states");
   cmd->add_flag("--quiet,-q", o->quiet, "no progress line");
-  cmd->callback([o]() {
+  add_export_option(cmd, o->export_format);
+  cmd->callback([o, cmd]() {
+    if (o->from.empty() == o->pattern.empty())
+      throw std::invalid_argument("relax: give either a PATTERN or --from FILE");
+    o->time_step_given = cmd->count("--time-step") > 0;
+    if (!o->from.empty()) return relax_imported(*o);
     namespace fs = std::filesystem;
     // everything is validated before anything is written
     const knit::Pattern pattern = knit::load_pattern(o->pattern);
@@ -65,7 +119,7 @@ void register_relax(CLI::App& app) {
     knit::Params params = knit::Params::relaxation();
     params.gravity.setZero();  // the sample relaxes in free space
     params.contact_points = o->contact_points;
-    const knit::Model model = knit::build_knit_model(knit, params, o->shrink);
+    const knit::Model model = knit::build_knit_model(knit, params, o->shrink, GLUE_CLOSE_TIME);
     auto control = make_thread_control(o->threads);
 
     knit::State state;
@@ -106,6 +160,7 @@ void register_relax(CLI::App& app) {
     fs::copy_file(fs::path(o->out) / "final.kstate", fs::path(o->out) / "relaxed.kstate",
                   fs::copy_options::overwrite_existing);
     print_report(report, o->out);
+    export_run(o->out, o->export_format);
     const auto& s = report.summary;
     std::cout << "relaxed " << o->pattern << " " << o->knit.rows << "x" << o->knit.cols << ": "
               << (s["relaxed"].get<bool>() ? "at rest" : "time limit reached before rest")

@@ -17,6 +17,7 @@ void register_simulate(CLI::App& app) {
     int threads = 0;
     double duration = -1;
     bool quiet = false;
+    std::string export_format;
   };
   auto opts = std::make_shared<Opts>();
   CLI::App* cmd = app.add_subcommand("simulate", "run a scene file (JSON) and write its states");
@@ -25,6 +26,7 @@ void register_simulate(CLI::App& app) {
   add_threads_option(cmd, opts->threads);
   cmd->add_option("--duration", opts->duration, "override the scene's duration (s)");
   cmd->add_flag("--quiet,-q", opts->quiet, "no progress line");
+  add_export_option(cmd, opts->export_format);
   cmd->callback([opts]() {
     // everything is validated before anything is written
     knit::Scene scene = knit::load_scene(opts->scene);
@@ -40,6 +42,7 @@ void register_simulate(CLI::App& app) {
     run.extra["scene"] = opts->scene;
     const knit::RunReport report = knit::run_simulation(sim, scene.state, run);
     print_report(report, opts->out);
+    export_run(opts->out, opts->export_format);
     if (report.status != knit::StepStatus::OK) throw RunFailed();
   });
 }

@@ -17,6 +17,11 @@ struct RunFailed {};
 void add_threads_option(CLI::App* cmd, int& threads);
 /// Limits TBB to `threads` workers for the lifetime of the returned object (0: no limit).
 std::unique_ptr<tbb::global_control> make_thread_control(int threads);
+/// Adds --export usd|obj|bcc|ply.
+void add_export_option(CLI::App* cmd, std::string& format);
+/// Exports a finished run: usd → DIR/frames.usda (every written state as time samples),
+/// obj|bcc|ply → DIR/final.<ext>. Nothing when `format` is empty.
+void export_run(const std::string& out_dir, const std::string& format);
 /// One line per run: status, steps, time, where the outputs are.
 void print_report(const knit::RunReport& report, const std::string& out_dir);
 

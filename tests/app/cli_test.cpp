@@ -82,3 +82,51 @@ TEST(Cli, UnknownOptionFails) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST(Cli, RelaxSmallSwatchWritesShapeSummaryAndExport) {
+  const std::string out = temp_dir("cli_relax");
+  const Result r = run("relax stockinette --rows 4 --cols 5 --max-time 0.005 --quiet --export obj --out " + out);
+  ASSERT_EQ(r.code, 0) << r.output;
+  std::ifstream in(out + "/summary.json");
+  const auto s = nlohmann::json::parse(in);
+  for (const char* key : {"pattern", "rows", "cols", "course_extent_cm", "wale_extent_cm", "thickness_cm",
+                          "stitch_width_cm", "row_height_cm", "loop_length_cm", "edge_curl", "relaxed",
+                          "ke_per_length", "ke_per_length_threshold", "min_contact_distance"})
+    EXPECT_TRUE(s.contains(key)) << key;
+  EXPECT_EQ(s["rows"], 4);
+  EXPECT_EQ(s["cols"], 5);
+  EXPECT_GT(s["course_extent_cm"].get<double>(), s["wale_extent_cm"].get<double>() * 0.5);
+  for (const char* f : {"/initial.kstate", "/relaxed.kstate", "/final.obj", "/log.csv"})
+    EXPECT_TRUE(fs::exists(out + f)) << f;
+}
+
+TEST(Cli, RelaxRejectsUnknownPatternAndWritesNothing) {
+  const std::string out = temp_dir("cli_relax_bad");
+  const Result r = run("relax plainweave --rows 4 --cols 4 --out " + out);
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.output.find("plainweave"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(out));
+  const Result r2 = run("relax --out " + out);
+  EXPECT_NE(r2.code, 0);
+  EXPECT_NE(r2.output.find("PATTERN or --from"), std::string::npos) << r2.output;
+}
+
+TEST(Cli, SceneCanImportYarnFiles) {
+  const std::string scene = ::testing::TempDir() + "/cli_import.json";
+  std::ofstream(scene) << R"({"yarns": [{"import": {"path": ")" << KNIT_SHARED_DATA
+                       << R"(/yarns/knit-2x2.yarns"}}], "gravity": [0,0,0], "params": {"contact": false},
+                              "time_step": 0.00002, "duration": 0.0002})";
+  const std::string out = temp_dir("cli_import_out");
+  const Result r = run("simulate " + scene + " --quiet --out " + out);
+  ASSERT_EQ(r.code, 0) << r.output;
+  std::ifstream in(out + "/summary.json");
+  EXPECT_GT(nlohmann::json::parse(in)["segments"].get<int>(), 50);
+  std::ofstream(scene) << R"({"yarns": [{"import": "missing.yarns"}]})";
+  const Result bad = run("simulate " + scene + " --out " + out + "_bad");
+  EXPECT_EQ(bad.code, 1);
+  EXPECT_NE(bad.output.find("yarns[0].import"), std::string::npos) << bad.output;
+}
+
+}  // namespace

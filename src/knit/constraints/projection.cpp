@@ -65,7 +65,7 @@ void FastProjection::evaluate(const Model& model, const Eigen::VectorXd& q, doub
     row += 3;
   }
   for (const Glue& glue : model.glues) {
-    c.segment<3>(row) = point_position(model, q, glue.a) - point_position(model, q, glue.b);
+    c.segment<3>(row) = point_position(model, q, glue.a) - point_position(model, q, glue.b) - glue.offset(time);
     row += 3;
   }
 }

@@ -46,9 +46,17 @@ struct Pin {
   }
 };
 
-/// Glue constraint y(a) − y(b) = 0.
+/// Glue constraint y(a) − y(b) = g(time). The gap g starts at `gap` and closes linearly
+/// to 0 over `close_time` seconds, so a yarn end laid next to the point it is glued to is
+/// drawn in smoothly instead of snapped (which would kink the yarn's light end).
 struct Glue {
   YarnPoint a, b;
+  Eigen::Vector3d gap = Eigen::Vector3d::Zero();  ///< cm at time 0
+  double close_time = 0;                          ///< s
+  Eigen::Vector3d offset(double time) const {
+    if (close_time <= 0 || time >= close_time) return Eigen::Vector3d::Zero();
+    return gap * (1.0 - std::max(time, 0.0) / close_time);
+  }
 };
 
 class Model {

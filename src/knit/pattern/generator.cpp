@@ -578,11 +578,21 @@ GeneratedKnit generate_knit(const Pattern& pattern_in, const KnitOptions& opt) {
   return out;
 }
 
-Model build_knit_model(const GeneratedKnit& knit, const Params& params, double rest_scale) {
+Model build_knit_model(const GeneratedKnit& knit, const Params& params, double rest_scale,
+                       double glue_close_time) {
   ModelBuilder b;
   b.add_yarn(knit.control_points);
   b.set_stitches(knit.stitch);
-  for (const Glue& g : knit.glues) b.add_glue(g);
+  for (Glue g : knit.glues) {
+    if (glue_close_time > 0) {
+      auto at = [&](const YarnPoint& p) -> Eigen::Vector3d {
+        return knit.control_points.middleCols<4>(p.segment) * bspline_basis(p.t);
+      };
+      g.gap = at(g.a) - at(g.b);
+      g.close_time = glue_close_time;
+    }
+    b.add_glue(g);
+  }
   return b.build(params, rest_scale);
 }
 

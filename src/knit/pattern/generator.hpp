@@ -73,8 +73,11 @@ struct GeneratedKnit {
 /// std::invalid_argument naming the option on bad input.
 GeneratedKnit generate_knit(const Pattern& pattern, const KnitOptions& options);
 
-/// A model holding the knit as its only yarn, with its stitch coordinates and glues.
-Model build_knit_model(const GeneratedKnit& knit, const Params& params, double rest_scale = 1.0);
+/// A model holding the knit as its only yarn, with its stitch coordinates and glues. With
+/// `glue_close_time` > 0 every glue starts at its generated gap and closes over that time
+/// (s); with 0 the glue holds the ends together from the start.
+Model build_knit_model(const GeneratedKnit& knit, const Params& params, double rest_scale = 1.0,
+                       double glue_close_time = 0);
 
 /// Closest approach between non-neighbouring segments of one yarn.
 struct MinDistance {

@@ -2,6 +2,9 @@
 
 #include <cmath>
 
+#include <filesystem>
+
+#include "knit/io/import.hpp"
 #include "knit/spline/fit.hpp"
 
 namespace knit {
@@ -23,11 +26,35 @@ Eigen::Matrix3Xd read_points(const JsonReader& r, size_t min_size) {
   return p;
 }
 
+// yarns read from a .yarns/.bcc/.obj file, path relative to the scene file
+std::vector<Eigen::Matrix3Xd> parse_import(const JsonReader& y, const std::string& scene_path) {
+  const JsonReader imp = y.at("import");
+  ImportOptions opt;
+  std::string path;
+  if (imp.value().is_string()) {
+    path = imp.string();
+  } else {
+    imp.allow_keys({"path", "scale", "segments_per_cm"});
+    path = imp.at("path").string();
+    if (imp.has("scale")) opt.scale = imp.at("scale").positive();
+    if (imp.has("segments_per_cm")) opt.segments_per_cm = imp.at("segments_per_cm").positive();
+  }
+  const std::filesystem::path base = std::filesystem::path(scene_path).parent_path();
+  const std::filesystem::path full = std::filesystem::path(path).is_absolute() ? std::filesystem::path(path) : base / path;
+  std::vector<Eigen::Matrix3Xd> out;
+  try {
+    for (const ImportedYarn& yarn : import_yarns(full.string(), opt)) out.push_back(yarn.control_points);
+  } catch (const std::exception& e) {
+    imp.fail(e.what());
+  }
+  return out;
+}
+
 Eigen::Matrix3Xd parse_yarn(const JsonReader& y) {
-  y.allow_keys({"points", "polyline", "segments", "line", "helix", "circle"});
+  y.allow_keys({"points", "polyline", "segments", "line", "helix", "circle", "import"});
   int kinds = y.has("points") + y.has("polyline") + y.has("line") + y.has("helix") + y.has("circle");
   if (kinds != 1)
-    y.fail("expected exactly one of \"points\", \"polyline\", \"line\", \"helix\", \"circle\"");
+    y.fail("expected exactly one of \"points\", \"polyline\", \"line\", \"helix\", \"circle\", \"import\"");
   if (y.has("segments") && !y.has("polyline"))
     y.at("segments").fail("\"segments\" belongs to a \"polyline\" yarn");
   if (y.has("points")) {
@@ -174,7 +201,15 @@ Scene parse_scene(const nlohmann::json& doc, const std::string& source) {
   ModelBuilder builder;
   const JsonReader yarns = root.at("yarns");
   yarns.require_array(1);
-  for (size_t k = 0; k < yarns.size(); ++k) builder.add_yarn(parse_yarn(yarns.at(k)));
+  for (size_t k = 0; k < yarns.size(); ++k) {
+    const JsonReader y = yarns.at(k);
+    if (y.has("import")) {
+      y.allow_keys({"import"});
+      for (const Eigen::Matrix3Xd& cp : parse_import(y, source)) builder.add_yarn(cp);
+    } else {
+      builder.add_yarn(parse_yarn(y));
+    }
+  }
 
   const Eigen::VectorXd q0 = builder.positions();
   // pins start where their yarn point is; build a throwaway model for positions

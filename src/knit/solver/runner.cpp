@@ -93,9 +93,17 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
     last_output_step = report.steps;
   };
 
+  // start on the constraints (glued ends laid apart, pins given off the yarn, …)
+  const ProjectionResult initial = sim.satisfy_constraints(state);
+  if (!initial.converged) {
+    report.status = StepStatus::PROJECTION_FAILED;
+    report.message = "the initial state cannot be brought onto the constraints (max |C| = " +
+                     std::to_string(initial.max_violation) +
+                     "): check pins and glue for conflicting targets";
+  }
   write_output();
   bool stopped_early = false;
-  while (report.steps < total_steps) {
+  while (report.status == StepStatus::OK && report.steps < total_steps) {
     const StepResult res = sim.step(state, opt.time_step);
     if (!res.ok()) {
       report.status = res.status;

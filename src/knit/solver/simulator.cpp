@@ -1,6 +1,8 @@
 #include "knit/solver/simulator.hpp"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <sstream>
 
 #include "knit/contact/contact_term.hpp"
@@ -24,6 +26,20 @@ class ScopedTimer {
   double& m_sink;
   std::chrono::steady_clock::time_point m_start;
 };
+
+// largest displacement of any control point between two position vectors (cm), and which
+std::pair<double, int> max_travel(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+  double worst = 0;
+  int which = 0;
+  for (Eigen::Index k = 0; k + 2 < a.size(); k += 3) {
+    const double d = (a.segment<3>(k) - b.segment<3>(k)).squaredNorm();
+    if (d > worst) {
+      worst = d;
+      which = static_cast<int>(k / 3);
+    }
+  }
+  return {std::sqrt(worst), which};
+}
 
 }  // namespace
 
@@ -88,6 +104,10 @@ ProjectionResult Simulator::project(Eigen::VectorXd& q, Eigen::VectorXd& v, doub
   return res;
 }
 
+ProjectionResult Simulator::satisfy_constraints(State& state) {
+  return m_projection.project(m_model, state.q, state.time);
+}
+
 void Simulator::apply_filters(const Eigen::VectorXd& q, Eigen::VectorXd& v, double time) {
   for (auto& f : m_filters) {
     ScopedTimer timer(m_seconds[std::string(f->name())]);
@@ -120,6 +140,21 @@ StepResult Simulator::step(State& state, double h) {
     res.status = StepStatus::NON_FINITE;
     res.message = "positions or velocities became non-finite at t = " + std::to_string(t_new) +
                   " s; try a smaller time step";
+    return res;
+  }
+  // a control point that moves more than a yarn radius in one step can carry its yarn
+  // through another one between two contact evaluations: the run is no longer trustworthy
+  const auto [travel, cp] = max_travel(state.q, m_qnew);
+  if (travel > m_model.params.radius) {
+    int yarn = 0;
+    while (cp >= m_model.yarns[yarn].cp_end) ++yarn;
+    std::ostringstream msg;
+    msg << "control point " << cp - m_model.yarns[yarn].cp_begin << " of yarn " << yarn << " moved "
+        << travel << " cm in one step at t = " << t_new
+        << " s, more than the yarn radius (" << m_model.params.radius
+        << " cm): the run is unstable; try a smaller time step";
+    res.status = StepStatus::NON_FINITE;
+    res.message = msg.str();
     return res;
   }
   state.q.swap(m_qnew);

@@ -4,8 +4,9 @@
 //   1. unconstrained explicit-midpoint step of (q, v)       — two force evaluations
 //   2. fast projection onto the constraints, v += Δq / h
 //   3. velocity filters (non-rigid damping, object collisions)
-// A step that fails (non-finite values, projection not converging) leaves the State
-// untouched and reports why.
+// A step that fails leaves the State untouched and reports why: non-finite values, a
+// control point moving more than a yarn radius in one step (contact could then let yarns
+// pass through each other), or a projection that does not converge.
 #include <map>
 #include <memory>
 #include <string>
@@ -57,6 +58,10 @@ class Simulator {
                           Eigen::VectorXd& v_out);
   /// Stage 2: projects q (in place) at `time`, correcting v by the displacement / h.
   ProjectionResult project(Eigen::VectorXd& q, Eigen::VectorXd& v, double time, double h);
+  /// Moves the positions onto the constraints (no velocity change): call once before a
+  /// run whose initial state may violate them (e.g. glued yarn ends laid a yarn diameter
+  /// from the point they are glued to).
+  ProjectionResult satisfy_constraints(State& state);
   /// Stage 3: every velocity filter in order.
   void apply_filters(const Eigen::VectorXd& q, Eigen::VectorXd& v, double time);
 
