@@ -53,6 +53,19 @@ class RigidRegionPass {
   double m_alpha;
   std::vector<int> m_seg_begin;  // CSR: regions containing each segment
   std::vector<int> m_seg_regions;
+  // per-evaluation scratch (reused: no allocation in the steady state)
+  struct Moments {
+    double m = 0;
+    Eigen::Vector3d mx, mu, xu;  // Σw x, Σw u, Σw x×u
+    Eigen::Matrix3d xx;          // Σw x xᵀ
+  };
+  struct RigidFit {
+    Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+    Eigen::Vector3d velocity = Eigen::Vector3d::Zero();
+    Eigen::Vector3d omega = Eigen::Vector3d::Zero();
+  };
+  mutable std::vector<Moments> m_moments;
+  mutable std::vector<RigidFit> m_fit;
 };
 
 class NonRigidDampingFilter : public VelocityFilter {
