@@ -39,3 +39,104 @@ inline double now_s() {
 }
 
 }  // namespace knit::bench
+
+#include <memory>
+
+#include "knit/filters/nonrigid_damping.hpp"
+#include "knit/io/state_file.hpp"
+#include "knit/pattern/generator.hpp"
+#include "knit/pattern/pattern.hpp"
+#include "knit/solver/simulator.hpp"
+
+namespace knit::bench {
+
+/// A knitted sample ready to step with the simulation parameters (MODEL.md §8): the
+/// generated yarn of `pattern` (or, when `state_path` is given, a relaxed state of the same
+/// pattern and size, e.g. out/relax/relaxed.kstate), its rest lengths taken from that
+/// geometry, length constraints on, non-rigid damping on, gravity on.
+struct StepSetup {
+  std::unique_ptr<Simulator> sim;
+  State state;
+  bool relaxed = false;
+};
+
+inline StepSetup make_step_setup(const std::string& pattern, int rows, int cols,
+                                 int contact_points, const std::string& state_path = "") {
+  KnitOptions ko;
+  ko.rows = rows;
+  ko.cols = cols;
+  GeneratedKnit knit = generate_knit(load_pattern(pattern), ko);
+  StepSetup s;
+  if (!state_path.empty()) {
+    const StateFile f = read_state_file(state_path);
+    if (f.state.q.size() != knit.control_points.size())
+      throw std::runtime_error(state_path + ": not a " + pattern + " " + std::to_string(rows) + "x" +
+                               std::to_string(cols) + " sample");
+    knit.control_points = Eigen::Map<const Eigen::Matrix3Xd>(f.state.q.data(), 3, f.state.q.size() / 3);
+    s.relaxed = true;
+  }
+  Params p = Params::simulation();
+  p.contact_points = contact_points;
+  const Model model = build_knit_model(knit, p);
+  s.sim = std::make_unique<Simulator>(model);
+  s.sim->add_filter(std::make_unique<NonRigidDampingFilter>(model, p.alpha_small, p.alpha_large));
+  s.state.q = Eigen::Map<const Eigen::VectorXd>(knit.control_points.data(), knit.control_points.size());
+  s.state.v = Eigen::VectorXd::Zero(s.state.q.size());
+  s.sim->satisfy_constraints(s.state);
+  return s;
+}
+
+/// Steps `steps` times (after `warmup` untimed steps) and returns timings as JSON:
+/// us_per_segment_step, ms_per_step, seconds per stage, contact pairs per step.
+nlohmann::json time_steps(StepSetup& s, int warmup, int steps, double h);
+
+}  // namespace knit::bench
+
+#include "knit/contact/contact_term.hpp"
+
+namespace knit::bench {
+
+inline nlohmann::json time_steps(StepSetup& s, int warmup, int steps, double h) {
+  Simulator& sim = *s.sim;
+  for (int i = 0; i < warmup; ++i)
+    if (!sim.step(s.state, h).ok()) throw std::runtime_error("warm-up step failed");
+  sim.reset_timings();
+  const auto* contact = dynamic_cast<const ContactTerm*>(sim.find_term("contact"));
+  double pairs = 0;
+  int iterations = 0;
+  const double t0 = now_s();
+  for (int i = 0; i < steps; ++i) {
+    const StepResult r = sim.step(s.state, h);
+    if (!r.ok()) throw std::runtime_error("step failed: " + r.message);
+    iterations += r.projection.iterations;
+    if (contact) pairs += static_cast<double>(contact->last_stats().point_pairs_in_contact);
+  }
+  const double wall = now_s() - t0;
+  const int nseg = sim.model().num_seg();
+  nlohmann::json stages = nlohmann::json::object();
+  double other = 0;
+  for (const auto& [name, sec] : sim.stage_seconds()) {
+    stages[name + "_s_per_step"] = sec / steps;
+    if (name != "contact" && name != "projection" && name != "nonrigid_damping") other += sec;
+  }
+  const auto& st = sim.stage_seconds();
+  auto get = [&](const char* k) { return st.count(k) ? st.at(k) : 0.0; };
+  const double total = wall;
+  return {{"segments", nseg},
+          {"contact_points_per_segment", sim.model().params.contact_points},
+          {"threads", tbb::this_task_arena::max_concurrency()},
+          {"steps", steps},
+          {"time_step_s", h},
+          {"us_per_segment_step", 1e6 * wall / (static_cast<double>(steps) * nseg)},
+          {"ms_per_step", 1e3 * wall / steps},
+          {"contact_pairs_per_step", pairs / steps},
+          {"projection_iterations_per_step", static_cast<double>(iterations) / steps},
+          {"split",
+           {{"yarn_contact", get("contact") / total},
+            {"other_energies", other / total},
+            {"constraints", get("projection") / total},
+            {"velocity_filters", get("nonrigid_damping") / total}}},
+          {"stages", stages}};
+}
+
+}  // namespace knit::bench
