@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <limits>
@@ -59,7 +60,9 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
   if (opt.write_frames) fs::create_directories(dir / "frames");
   const Model& model = sim.model();
 
-  std::ostringstream log;
+  // the log grows row by row so long runs can be followed (tail -f DIR/log.csv)
+  std::ofstream log(dir / "log.csv", std::ios::trunc);
+  if (!log) throw std::runtime_error((dir / "log.csv").string() + ": cannot open for writing");
   log << "time_s,kinetic_energy,potential_energy,max_violation,contact_pairs,min_contact_distance,"
          "wall_s_per_step\n";
   log << std::setprecision(10);
@@ -85,7 +88,7 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
     log << state.time << "," << sim.kinetic_energy(state) << "," << sim.potential_energy(state)
         << "," << sim.max_violation(state) << "," << (cr.present ? cr.pairs_in_contact : 0) << ","
         << (cr.present && std::isfinite(cr.min_distance_ratio) ? cr.min_distance_ratio : -1)
-        << "," << (dsteps > 0 ? wall / dsteps : 0.0) << "\n";
+        << "," << (dsteps > 0 ? wall / dsteps : 0.0) << "\n" << std::flush;
     if (opt.write_frames)
       write_state_file((dir / "frames" / frame_name(frame)).string(), make_state_file(model, state));
     ++frame;
@@ -145,7 +148,7 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
   write_state_file((dir / "final.kstate").string(), make_state_file(model, state));
   if (report.status != StepStatus::OK)
     write_state_file((dir / "last_good.kstate").string(), make_state_file(model, state));
-  write_file_atomic((dir / "log.csv").string(), log.str());
+  log.close();
 
   nlohmann::json s;
   s["status"] = status_word(report.status);

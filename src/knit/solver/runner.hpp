@@ -5,7 +5,8 @@
 //   DIR/final.kstate                 the last state (the last good one if the run failed)
 //   DIR/log.csv                      time_s, kinetic_energy, potential_energy,
 //                                    max_violation, contact_pairs, min_contact_distance,
-//                                    wall_s_per_step — one row per written state
+//                                    wall_s_per_step — one row per written state,
+//                                    appended as the run goes
 //   DIR/summary.json                 status, counts, energies, timings (see docs/)
 #include <functional>
 #include <nlohmann/json.hpp>
