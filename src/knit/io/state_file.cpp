@@ -1,5 +1,7 @@
 #include "knit/io/state_file.hpp"
 
+#include "knit/io/byte_reader.hpp"
+
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -20,36 +22,6 @@ void put(std::string& out, T value) {
   std::memcpy(buf, &value, sizeof(T));
   out.append(buf, sizeof(T));
 }
-
-class Reader {
- public:
-  Reader(std::string path, std::string data) : m_path(std::move(path)), m_data(std::move(data)) {}
-  template <class T>
-  T get(const char* what) {
-    need(sizeof(T), what);
-    T value;
-    std::memcpy(&value, m_data.data() + m_pos, sizeof(T));
-    m_pos += sizeof(T);
-    return value;
-  }
-  void expect(const char* magic, size_t n, const char* what) {
-    need(n, what);
-    if (std::memcmp(m_data.data() + m_pos, magic, n) != 0) fail(std::string("bad ") + what);
-    m_pos += n;
-  }
-  [[noreturn]] void fail(const std::string& msg) const {
-    throw std::runtime_error(m_path + ": byte " + std::to_string(m_pos) + ": " + msg);
-  }
-  size_t remaining() const { return m_data.size() - m_pos; }
-
- private:
-  void need(size_t n, const char* what) const {
-    if (m_pos + n > m_data.size())
-      fail(std::string("file ends early while reading ") + what + " (truncated?)");
-  }
-  std::string m_path, m_data;
-  size_t m_pos = 0;
-};
 
 }  // namespace
 
@@ -143,8 +115,9 @@ StateFile read_state_file(const std::string& path) {
   if (!in) throw std::runtime_error(path + ": cannot open state file");
   std::stringstream ss;
   ss << in.rdbuf();
-  Reader r(path, ss.str());
-  r.expect(MAGIC, 8, "magic (not a knitsim state file)");
+  const std::string data = ss.str();
+  detail::ByteReader r(data, path);
+  if (r.bytes(8, "magic") != std::string_view(MAGIC, 8)) r.fail_at(0, "not a knitsim state file (bad magic)");
   const auto version = r.get<uint32_t>("version");
   if (version != STATE_FILE_VERSION)
     r.fail("unsupported state file version " + std::to_string(version) + " (this build reads " +
@@ -182,7 +155,7 @@ StateFile read_state_file(const std::string& path) {
       s.col = r.get<int32_t>("stitch column");
     }
   }
-  r.expect(END_MAGIC, 4, "end marker");
+  if (r.bytes(4, "end marker") != std::string_view(END_MAGIC, 4)) r.fail("bad end marker");
   if (r.remaining() != 0) r.fail("unexpected bytes after the end marker");
   return f;
 }
