@@ -49,7 +49,7 @@ int main(int argc, char** argv) {
                         {"rows", rows},
                         {"cols", cols},
                         {"segments", model.num_seg()},
-                        {"threads", tbb::this_task_arena::max_concurrency()},
+                        {"threads", tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism)},
                         {"status", r.summary["status"]},
                         {"relaxed", r.summary["relaxed"]},
                         {"steps", r.steps},

@@ -124,7 +124,7 @@ inline nlohmann::json time_steps(StepSetup& s, int warmup, int steps, double h) 
   const double total = wall;
   return {{"segments", nseg},
           {"contact_points_per_segment", sim.model().params.contact_points},
-          {"threads", tbb::this_task_arena::max_concurrency()},
+          {"threads", tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism)},
           {"steps", steps},
           {"time_step_s", h},
           {"us_per_segment_step", 1e6 * wall / (static_cast<double>(steps) * nseg)},

@@ -1,5 +1,6 @@
 #include "knit/solver/runner.hpp"
 
+#include <tbb/global_control.h>
 #include <tbb/info.h>
 #include <tbb/task_arena.h>
 #include <unistd.h>
@@ -158,7 +159,7 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
   s["time_step_s"] = opt.time_step;
   s["sim_time_s"] = state.time;
   s["wall_time_s"] = wall;
-  s["threads"] = tbb::this_task_arena::max_concurrency();
+  s["threads"] = tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism);
   s["yarns"] = model.yarns.size();
   s["segments"] = model.num_seg();
   s["control_points"] = model.num_cp();
