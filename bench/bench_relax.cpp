@@ -49,7 +49,7 @@ int main(int argc, char** argv) {
                         {"rows", rows},
                         {"cols", cols},
                         {"segments", model.num_seg()},
-                        {"threads", tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism)},
+                        {"threads", knit::bench::active_threads()},
                         {"status", r.summary["status"]},
                         {"relaxed", r.summary["relaxed"]},
                         {"steps", r.steps},

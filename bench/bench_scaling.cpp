@@ -45,7 +45,7 @@ int main(int argc, char** argv) {
   const double intercept = (sy - slope * sx) / n;
   std::cout << nlohmann::json{{"benchmark", "scaling"},
                               {"contact_points_per_segment", points},
-                              {"threads", tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism)},
+                              {"threads", knit::bench::active_threads()},
                               {"runs", runs},
                               {"slope_us_per_segment_step", 1e3 * slope},
                               {"intercept_ms_per_step", intercept},

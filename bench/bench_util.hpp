@@ -5,6 +5,7 @@
 #include <tbb/task_arena.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -32,6 +33,13 @@ inline nlohmann::json machine_info() {
           {"build", "debug"}
 #endif
   };
+}
+
+/// Worker threads in force here: the current arena's size, capped by any global_control.
+inline int active_threads() {
+  return static_cast<int>(std::min<size_t>(
+      tbb::this_task_arena::max_concurrency(),
+      tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism)));
 }
 
 inline double now_s() {
@@ -124,7 +132,7 @@ inline nlohmann::json time_steps(StepSetup& s, int warmup, int steps, double h) 
   const double total = wall;
   return {{"segments", nseg},
           {"contact_points_per_segment", sim.model().params.contact_points},
-          {"threads", tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism)},
+          {"threads", active_threads()},
           {"steps", steps},
           {"time_step_s", h},
           {"us_per_segment_step", 1e6 * wall / (static_cast<double>(steps) * nseg)},

@@ -159,7 +159,9 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
   s["time_step_s"] = opt.time_step;
   s["sim_time_s"] = state.time;
   s["wall_time_s"] = wall;
-  s["threads"] = tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism);
+  s["threads"] = std::min<size_t>(
+      tbb::this_task_arena::max_concurrency(),
+      tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
   s["yarns"] = model.yarns.size();
   s["segments"] = model.num_seg();
   s["control_points"] = model.num_cp();
