@@ -1,0 +1,133 @@
+// Times the whole simulation step (Simulator::step: two force evaluations, projection,
+// filters) on a knit-like sample of interlocking loops (knit_like_sample, squeeze 0.9) as
+// a proxy for the relaxed 42×32 stockinette of the paper's stretch tests (MODEL.md §9):
+// simulation parameters, length constraints on, gravity 0, nothing pinned, from rest.
+//
+//   bench_step_proxy [segments=11264[,…]] [points_per_segment=20] [threads=1[,…]] [steps=10]
+//
+// Comma-separated lists run every combination (e.g. "2000,8000,32000,64000" and "1,2").
+// Every run starts from the same state, so every thread count simulates the same
+// trajectory. Two untimed warm-up steps build the BVH and the projection's symbolic
+// factorisation. Prints one JSON document: per run the median step, µs per segment-step,
+// seconds per stage per step, contact point pairs per step, projection iterations, CPU.
+#include <tbb/global_control.h>
+
+#include <algorithm>
+#include <cmath>
+#include <iostream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "bench_util.hpp"
+#include "knit/contact/contact_samples.hpp"
+#include "knit/contact/contact_term.hpp"
+#include "knit/solver/simulator.hpp"
+
+namespace {
+
+std::vector<int> int_list(int argc, char** argv, int k, const std::vector<int>& fallback) {
+  if (argc <= k) return fallback;
+  std::vector<int> out;
+  std::stringstream in(argv[k]);
+  for (std::string item; std::getline(in, item, ',');) {
+    const int value = std::stoi(item);
+    if (value < 1)
+      throw std::invalid_argument(std::string("argument ") + argv[k] + " must be positive");
+    out.push_back(value);
+  }
+  return out;
+}
+
+double median(std::vector<double> x) {
+  std::sort(x.begin(), x.end());
+  return x[x.size() / 2];
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    const std::vector<int> sizes = int_list(argc, argv, 1, {11264});
+    const int points = int_list(argc, argv, 2, {20}).front();
+    const std::vector<int> thread_counts = int_list(argc, argv, 3, {1});
+    const int steps = int_list(argc, argv, 4, {10}).front();
+    const double h = 1.0 / 11800;
+
+    nlohmann::ordered_json out;
+    out["machine"] = knit::bench::machine_info();
+    out["time_step_s"] = h;
+    out["steps"] = steps;
+    out["runs"] = nlohmann::json::array();
+    for (const int segments : sizes) {
+      // a fabric about as tall as wide: 8 segments per loop, rows ≈ 1.4 × loops per row
+      const int loops = std::max(1, (segments + 7) / 8);
+      const int per_row = std::max(1, static_cast<int>(std::lround(std::sqrt(loops / 1.4))));
+      const int rows = std::max(1, (loops + per_row - 1) / per_row);
+      knit::Params params = knit::Params::simulation();
+      params.contact_points = points;
+      params.gravity.setZero();
+      const knit::ModelBuilder builder =
+          knit::knit_like_sample(rows, per_row, 8, params.radius, 0.9);
+      const knit::Model model = builder.build(params);
+      knit::State start;
+      start.q = builder.positions();
+      start.v = Eigen::VectorXd::Zero(start.q.size());
+
+      for (const int threads : thread_counts) {
+        tbb::global_control control(tbb::global_control::max_allowed_parallelism, threads);
+        knit::Simulator sim(model);
+        auto* contact = dynamic_cast<knit::ContactTerm*>(sim.find_term("contact"));
+        knit::State state = start;
+        for (int k = 0; k < 2; ++k)
+          if (!sim.step(state, h).ok()) throw std::runtime_error("warm-up step failed");
+        sim.reset_timings();
+        std::vector<double> step_s;
+        double contact_pairs = 0, candidates = 0, iterations = 0;
+        int max_iterations = 0;
+        for (int k = 0; k < steps; ++k) {
+          const double t0 = knit::bench::now_s();
+          const knit::StepResult res = sim.step(state, h);
+          step_s.push_back(knit::bench::now_s() - t0);
+          if (!res.ok()) throw std::runtime_error("step failed: " + res.message);
+          iterations += res.projection.iterations;
+          max_iterations = std::max(max_iterations, res.projection.iterations);
+          if (contact) {
+            contact_pairs += contact->last_stats().point_pairs_in_contact;
+            candidates += contact->last_stats().candidate_segment_pairs;
+          }
+        }
+        double total = 0;
+        for (double s : step_s) total += s;
+        const double med = median(step_s);
+        nlohmann::ordered_json run;
+        run["sample"] = "knit_like_sample rows=" + std::to_string(rows) +
+                        " loops_per_row=" + std::to_string(per_row) + " squeeze=0.9";
+        run["segments"] = model.num_seg();
+        run["points_per_segment"] = points;
+        run["threads"] = threads;
+        run["step_ms_median"] = 1e3 * med;
+        run["step_ms_min"] = 1e3 * *std::min_element(step_s.begin(), step_s.end());
+        run["us_per_segment_step"] = 1e6 * med / model.num_seg();
+        nlohmann::ordered_json stages;
+        for (const auto& [name, seconds] : sim.stage_seconds()) stages[name] = 1e3 * seconds / steps;
+        run["stage_ms_per_step"] = stages;
+        run["other_ms_per_step"] = [&] {
+          double staged = 0;
+          for (const auto& [name, seconds] : sim.stage_seconds()) staged += seconds;
+          return 1e3 * (total - staged) / steps;
+        }();
+        run["contact_point_pairs_per_evaluation"] = contact_pairs / steps;
+        run["candidate_segment_pairs_per_evaluation"] = candidates / steps;
+        run["projection_iterations_mean"] = iterations / steps;
+        run["projection_iterations_max"] = max_iterations;
+        out["runs"].push_back(run);
+      }
+    }
+    std::cout << out.dump(2) << "\n";
+  } catch (const std::exception& e) {
+    std::cerr << "bench_step_proxy: error: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}
