@@ -179,6 +179,22 @@ TEST(ContactTerm, BvhMatchesBruteForceAfterRefit) {
   expect_bvh_matches_brute(s, v, "tangle after refit", &s0.q);
 }
 
+TEST(ContactTerm, BvhMatchesBruteForceWithOddPointCountsAndWithoutDamping) {
+  // the vectorised kernel pads the points of a segment to whole vectors, and has a path
+  // without damping (k_dt = k_dn = 0): cover both against the plain dense kernel
+  for (int points : {1, 3, 7, 13, 20}) {
+    for (bool damping : {true, false}) {
+      Params p;
+      p.contact_points = points;
+      if (!damping) p.k_dt = p.k_dn = 0;
+      const Sample s = make(random_tangle(3, 25, 2.5, 30 + points), p);
+      const Eigen::VectorXd v = random_vector(s.q.size(), 3.0, 50 + points);
+      expect_bvh_matches_brute(s, v,
+                               std::to_string(points) + " points" + (damping ? "" : ", no damping"));
+    }
+  }
+}
+
 TEST(ContactTerm, ResultsDoNotDependOnThreadCount) {
   const Sample s = make(knit_like_sample(6, 6, 8, 0.125, 0.9));
   const Eigen::VectorXd v = random_vector(s.q.size(), 3.0, 21);

@@ -22,6 +22,7 @@
 // ContactCulling::BRUTE_FORCE visits all pairs serially with the plain dense kernel: the
 // test oracle, O(N²).
 #include <Eigen/Core>
+#include <array>
 #include <limits>
 #include <string_view>
 #include <vector>
@@ -111,7 +112,9 @@ class ContactTerm : public Term {
 
   void resize(const Model& model);
   void tabulate_points(const Model& model, const Eigen::VectorXd& q, const Eigen::VectorXd& v);
+  template <bool DAMP>
   void pair_kernel(const Model& model, int i, int j, RowStats& row);
+  int points_inside(const Aabb& box, size_t base, int* out) const;
   double add_force_bvh(const Model& model, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
                        Eigen::VectorXd& force);
   double add_force_brute(const Model& model, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
@@ -124,6 +127,7 @@ class ContactTerm : public Term {
   bool m_record = false;
   // contact points and velocities, structure of arrays, index segment·P + a
   std::vector<double> m_px, m_py, m_pz, m_vx, m_vy, m_vz;
+  std::vector<std::array<double, 4>> m_basis;  // B_0..3(t_a) per contact point
   std::vector<Aabb> m_boxes;
   Bvh m_bvh;
   std::vector<std::vector<int>> m_partners;     // per segment: candidates, sorted
