@@ -4,6 +4,7 @@
 // simulation parameters, length constraints on, gravity 0, nothing pinned, from rest.
 //
 //   bench_step_proxy [segments=11264[,…]] [points_per_segment=20] [threads=1[,…]] [steps=10]
+//                    [margin_radii=default]
 //
 // Comma-separated lists run every combination (e.g. "2000,8000,32000,64000" and "1,2").
 // Every run starts from the same state, so every thread count simulates the same
@@ -53,6 +54,8 @@ int main(int argc, char** argv) {
     const std::vector<int> thread_counts = int_list(argc, argv, 3, {1});
     const int steps = int_list(argc, argv, 4, {10}).front();
     const double h = 1.0 / 11800;
+    const double margin_radii =
+        argc > 5 ? std::stod(argv[5]) : knit::ContactTerm::DEFAULT_MARGIN_RADII;
 
     nlohmann::ordered_json out;
     out["machine"] = knit::bench::machine_info();
@@ -78,10 +81,13 @@ int main(int argc, char** argv) {
         tbb::global_control control(tbb::global_control::max_allowed_parallelism, threads);
         knit::Simulator sim(model);
         auto* contact = dynamic_cast<knit::ContactTerm*>(sim.find_term("contact"));
+        if (contact) contact->set_candidate_margin(margin_radii * params.radius);
         knit::State state = start;
         for (int k = 0; k < 2; ++k)
           if (!sim.step(state, h).ok()) throw std::runtime_error("warm-up step failed");
         sim.reset_timings();
+        const long long evals0 = contact ? contact->evaluations() : 0;
+        const long long rebuilds0 = contact ? contact->candidate_rebuilds() : 0;
         std::vector<double> step_s;
         double contact_pairs = 0, candidates = 0, iterations = 0;
         int max_iterations = 0;
@@ -119,6 +125,12 @@ int main(int argc, char** argv) {
         }();
         run["contact_point_pairs_per_evaluation"] = contact_pairs / steps;
         run["candidate_segment_pairs_per_evaluation"] = candidates / steps;
+        if (contact) {
+          run["contact_candidate_margin_cm"] = contact->candidate_margin();
+          run["contact_list_rebuilds_per_evaluation"] =
+              double(contact->candidate_rebuilds() - rebuilds0) /
+              double(std::max(1LL, contact->evaluations() - evals0));
+        }
         run["projection_iterations_mean"] = iterations / steps;
         run["projection_iterations_max"] = max_iterations;
         out["runs"].push_back(run);

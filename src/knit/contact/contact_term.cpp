@@ -65,7 +65,8 @@ bool has_damping(const Model& model, const Eigen::VectorXd& q, const Eigen::Vect
 
 }  // namespace
 
-ContactTerm::ContactTerm(const Model& model, ContactCulling culling) : m_culling(culling) {
+ContactTerm::ContactTerm(const Model& model, ContactCulling culling)
+    : m_culling(culling), m_margin(DEFAULT_MARGIN_RADII * model.params.radius) {
   const int points = model.params.contact_points;
   if (points < 1 || points > MAX_CONTACT_POINTS)
     throw std::invalid_argument("params.contact_points: expected 1 to " +
@@ -88,11 +89,23 @@ void ContactTerm::resize(const Model& model) {
   for (int a = 0; a < m_points; ++a)
     for (int c = 0; c < 4; ++c) m_basis[a][c] = model.contact_quad.b[a][c];
   m_boxes.assign(m_num_seg, Aabb{});
+  m_list_boxes.assign(m_num_seg, Aabb{});
+  m_list_box_tests.assign(m_num_seg, 0);
+  m_seg_moved.assign(m_num_seg, 0.0);
+  m_list_valid = false;
   m_partners.resize(m_num_seg);
   m_pairs.resize(m_num_seg);
   m_rows.assign(m_num_seg, RowStats{});
   m_row_records.resize(m_num_seg);
   m_bvh = Bvh{};
+}
+
+void ContactTerm::set_candidate_margin(double margin) {
+  if (!(margin >= 0) || !std::isfinite(margin))
+    throw std::invalid_argument("contact candidate margin: expected a finite margin >= 0 cm, got " +
+                                std::to_string(margin));
+  m_margin = margin;
+  m_list_valid = false;
 }
 
 double ContactTerm::add_force(const Model& model, const Eigen::VectorXd& q,
@@ -102,6 +115,7 @@ double ContactTerm::add_force(const Model& model, const Eigen::VectorXd& q,
   m_stats = ContactStats{};
   m_timings = ContactTimings{};
   m_point_pairs.clear();
+  ++m_evaluations;
   const auto t0 = Clock::now();
   const double energy = m_culling == ContactCulling::BVH ? add_force_bvh(model, q, v, force)
                                                          : add_force_brute(model, q, v, force);
@@ -115,6 +129,7 @@ void ContactTerm::tabulate_points(const Model& model, const Eigen::VectorXd& q,
   const double r = model.params.radius;
   const int P = m_points;
   const bool with_v = has_damping(model, q, v);
+  const bool check_motion = m_list_valid && m_culling == ContactCulling::BVH;
   tbb::parallel_for(tbb::blocked_range<int>(0, m_num_seg, 128),
                     [&](const tbb::blocked_range<int>& range) {
                       for (int s = range.begin(); s < range.end(); ++s) {
@@ -129,6 +144,21 @@ void ContactTerm::tabulate_points(const Model& model, const Eigen::VectorXd& q,
                           box.extend(p);
                         }
                         m_boxes[s] = box.grown(r);
+                        if (check_motion) {
+                          // largest per-axis displacement of the segment's points since the
+                          // candidate list was built
+                          // (+inf for a non-finite point: it forces a rebuild)
+                          double moved = 0;
+                          bool finite = true;
+                          for (int a = 0; a < P; ++a) {
+                            const size_t k = static_cast<size_t>(s) * P + a;
+                            moved = std::max({moved, std::abs(m_px[k] - m_lx[k]),
+                                              std::abs(m_py[k] - m_ly[k]),
+                                              std::abs(m_pz[k] - m_lz[k])});
+                            finite = finite && std::isfinite(m_px[k] + m_py[k] + m_pz[k]);
+                          }
+                          m_seg_moved[s] = finite ? moved : std::numeric_limits<double>::infinity();
+                        }
                         if (!with_v) continue;
                         const Vector12d u = gather_segment(v, model.seg_cp[s]);
                         for (int a = 0; a < P; ++a) {
@@ -140,6 +170,10 @@ void ContactTerm::tabulate_points(const Model& model, const Eigen::VectorXd& q,
                         }
                       }
                     });
+  // the maximum is exact, so the order does not matter
+  m_list_moved = 0;
+  if (check_motion)
+    for (int s = 0; s < m_num_seg; ++s) m_list_moved = std::max(m_list_moved, m_seg_moved[s]);
 }
 
 // The optimised pair kernel: the formulas of contact_kernel.cpp on the point pairs that
@@ -331,29 +365,43 @@ double ContactTerm::add_force_bvh(const Model& model, const Eigen::VectorXd& q,
   tabulate_points(model, q, v);
   m_timings.points = seconds_since(t);
 
-  t = Clock::now();
-  if (m_bvh.empty() || m_bvh.num_leaves() != n) {
-    m_bvh.build(m_boxes);
-    m_timings.build = seconds_since(t);
-  } else {
-    m_bvh.refit(m_boxes);
-    m_timings.refit = seconds_since(t);
-  }
-
-  // candidate segment pairs: every segment queries the tree with its own box
-  t = Clock::now();
-  tbb::parallel_for(tbb::blocked_range<int>(0, n, 64), [&](const tbb::blocked_range<int>& range) {
-    for (int i = range.begin(); i < range.end(); ++i) {
-      std::vector<int>& partners = m_partners[i];
-      partners.clear();
-      m_rows[i] = RowStats{};
-      m_rows[i].box_tests = m_bvh.query(m_boxes[i], [&](int j) {
-        if (j != i && !model.neighbours(i, j)) partners.push_back(j);
-      });
-      std::sort(partners.begin(), partners.end());
+  // candidate segment pairs, rebuilt only when some point moved more than δ/2 (see the
+  // header: the reused list gives the same forces bitwise)
+  const double half_margin = 0.5 * m_margin;
+  const bool rebuild = !m_list_valid || m_list_model != &model ||
+                       m_list_radius != model.params.radius || !(m_list_moved <= half_margin);
+  m_stats.candidates_rebuilt = rebuild;
+  m_rebuilds += rebuild;
+  if (rebuild) {
+    t = Clock::now();
+    m_lx = m_px;
+    m_ly = m_py;
+    m_lz = m_pz;
+    for (int s = 0; s < n; ++s) m_list_boxes[s] = m_boxes[s].grown(half_margin);
+    if (m_bvh.empty() || m_bvh.num_leaves() != n) {
+      m_bvh.build(m_list_boxes);
+      m_timings.build = seconds_since(t);
+    } else {
+      m_bvh.refit(m_list_boxes);
+      m_timings.refit = seconds_since(t);
     }
-  });
-  m_timings.traverse = seconds_since(t);
+    // every segment queries the tree with its own (grown) box
+    t = Clock::now();
+    tbb::parallel_for(tbb::blocked_range<int>(0, n, 64), [&](const tbb::blocked_range<int>& range) {
+      for (int i = range.begin(); i < range.end(); ++i) {
+        std::vector<int>& partners = m_partners[i];
+        partners.clear();
+        m_list_box_tests[i] = m_bvh.query(m_list_boxes[i], [&](int j) {
+          if (j != i && !model.neighbours(i, j)) partners.push_back(j);
+        });
+        std::sort(partners.begin(), partners.end());
+      }
+    });
+    m_timings.traverse = seconds_since(t);
+    m_list_valid = true;
+    m_list_model = &model;
+    m_list_radius = model.params.radius;
+  }
 
   // point-pair kernels, each pair (i < j) once, owned by row i
   t = Clock::now();
@@ -362,6 +410,8 @@ double ContactTerm::add_force_bvh(const Model& model, const Eigen::VectorXd& q,
       m_pairs[i].clear();
       if (m_record) m_row_records[i].clear();
       RowStats& row = m_rows[i];
+      row = RowStats{};
+      if (rebuild) row.box_tests = m_list_box_tests[i];
       const std::vector<int>& partners = m_partners[i];
       for (auto it = std::upper_bound(partners.begin(), partners.end(), i); it != partners.end();
            ++it) {
