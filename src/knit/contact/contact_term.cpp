@@ -3,6 +3,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <bit>
 #include <cassert>
 #include <chrono>
 #include <cmath>
@@ -37,16 +38,18 @@ inline VecD load(const double* p) {
   return v;
 }
 inline void store(double* p, VecD v) { std::memcpy(p, &v, sizeof v); }
-// whether any lane of a comparison result is true
-inline bool any(VecL m) {
+// the lanes of a comparison result as bits (lane l → bit l)
+inline unsigned lane_bits(VecL m) {
 #if defined(__AVX__)
-  return _mm256_movemask_pd(reinterpret_cast<__m256d>(m)) != 0;
+  return static_cast<unsigned>(_mm256_movemask_pd(reinterpret_cast<__m256d>(m)));
 #else
-  long long o = 0;
-  for (int l = 0; l < LANES; ++l) o |= m[l];
-  return o != 0;
+  unsigned bits = 0;
+  for (int l = 0; l < LANES; ++l) bits |= (m[l] != 0 ? 1u : 0u) << l;
+  return bits;
 #endif
 }
+// whether any lane of a comparison result is true
+inline bool any(VecL m) { return lane_bits(m) != 0; }
 // fixed-order reductions over the lanes
 inline double lane_sum(VecD v) {
   double s = v[0];
@@ -347,11 +350,9 @@ int ContactTerm::points_inside(const Aabb& box, size_t base, int* out) const {
   int n = 0;
   for (int a0 = 0; a0 < m_points; a0 += LANES) {
     const VecD x = load(&m_px[base + a0]), y = load(&m_py[base + a0]), z = load(&m_pz[base + a0]);
-    const VecL in = (x >= lx) & (x <= hx) & (y >= ly) & (y <= hy) & (z >= lz) & (z <= hz);
-    for (int l = 0; l < LANES; ++l) {
-      out[n] = a0 + l;
-      n += (in[l] != 0) & (a0 + l < m_points);
-    }
+    unsigned bits = lane_bits((x >= lx) & (x <= hx) & (y >= ly) & (y <= hy) & (z >= lz) & (z <= hz));
+    if (m_points - a0 < LANES) bits &= (1u << (m_points - a0)) - 1;
+    for (; bits; bits &= bits - 1) out[n++] = a0 + std::countr_zero(bits);
   }
   return n;
 }
