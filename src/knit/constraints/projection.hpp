@@ -3,8 +3,14 @@
 // Algorithm 1, lumped mass): repeat  (G M⁻¹ Gᵀ) δλ = C(q_j),  q_{j+1} = q_j − M⁻¹ Gᵀ δλ
 // until max |C| < tolerance. Rows: one per segment (inextensibility, when enabled), three
 // per pin (y(s) − p(time), cm), three per glue (y(a) − y(b), cm).
+//
+// Cost per iteration: one pass of the constraint kernel gives C and the rows of G at once;
+// A = G M⁻¹ Gᵀ is assembled in parallel straight into a pattern fixed at construction
+// (per entry, a precomputed list of the products that make it); the symbolic
+// factorisation is computed once; factorisation and solve are Eigen's SimplicialLDLT.
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
+#include <vector>
 
 #include "knit/model/model.hpp"
 
@@ -30,13 +36,23 @@ class FastProjection {
   static double max_length_violation(const Model& model, const Eigen::VectorXd& q);
 
  private:
-  void update_jacobian(const Model& model, const Eigen::VectorXd& q);
+  // one term G_rk G_ck / m_k of an entry of A: value indices into G, and the dof k
+  struct NormalTerm {
+    int ga, gb, k;
+  };
+  void evaluate_impl(const Model& model, const Eigen::VectorXd& q, double time,
+                     Eigen::VectorXd& c, bool jacobian);
+  void build_normal_pattern(int num_dof);
+  void assemble_normal_matrix(const Model& model);
   int m_len_rows = 0;
   int m_rows = 0;
   Eigen::SparseMatrix<double, Eigen::RowMajor> m_G;
-  Eigen::SparseMatrix<double> m_A;
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> m_solver;
-  Eigen::Index m_pattern_nnz = -1;
+  Eigen::SparseMatrix<double> m_A;        // lower triangle of G M⁻¹ Gᵀ (+ ridge), fixed pattern
+  std::vector<NormalTerm> m_terms;        // the terms of every entry of m_A, entry by entry
+  std::vector<int> m_term_begin;          // entry e's terms: [m_term_begin[e], [e + 1])
+  std::vector<Eigen::Index> m_diag;       // value index of A_cc
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> m_solver;  // reads the lower triangle
+  bool m_analyzed = false;
   Eigen::VectorXd m_c, m_dlambda;
 };
 
