@@ -1,3 +1,8 @@
+// the dense oracle below uses Eigen's dense product and LDLT, inside which GCC 12 warns
+// falsely (-Wmaybe-uninitialized in its AVX-512 intrinsics)
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
 #include "knit/constraints/projection.hpp"
 
 #include <gtest/gtest.h>
@@ -5,11 +10,6 @@
 #include "fd_check.hpp"
 #include "knit/constraints/inextensibility.hpp"
 
-// the dense oracle below uses Eigen's dense product and LDLT, inside which GCC 12 warns
-// falsely (-Wmaybe-uninitialized in its AVX-512 intrinsics)
-#if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#endif
 #include <Eigen/Dense>
 
 namespace knit {
