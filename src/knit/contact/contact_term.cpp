@@ -7,14 +7,11 @@
 #include <cassert>
 #include <chrono>
 #include <cmath>
-#include <cstring>
-#if defined(__AVX__)
-#include <immintrin.h>
-#endif
 #include <stdexcept>
 #include <string>
 
 #include "knit/contact/contact_kernel.hpp"
+#include "knit/energy/lanes.hpp"
 
 namespace knit {
 namespace {
@@ -25,42 +22,15 @@ double seconds_since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
-// LANES doubles as one GCC/Clang vector (AVX2 with -march=native; split or scalarised by
-// the compiler on narrower targets)
-constexpr int LANES = 4;
-typedef double VecD __attribute__((vector_size(LANES * sizeof(double))));
-typedef long long VecL __attribute__((vector_size(LANES * sizeof(long long))));
-
-inline VecD splat(double x) { return VecD{} + x; }
-inline VecD load(const double* p) {
-  VecD v;
-  std::memcpy(&v, p, sizeof v);
-  return v;
-}
-inline void store(double* p, VecD v) { std::memcpy(p, &v, sizeof v); }
-// the lanes of a comparison result as bits (lane l → bit l)
-inline unsigned lane_bits(VecL m) {
-#if defined(__AVX__)
-  return static_cast<unsigned>(_mm256_movemask_pd(reinterpret_cast<__m256d>(m)));
-#else
-  unsigned bits = 0;
-  for (int l = 0; l < LANES; ++l) bits |= (m[l] != 0 ? 1u : 0u) << l;
-  return bits;
-#endif
-}
-// whether any lane of a comparison result is true
-inline bool any(VecL m) { return lane_bits(m) != 0; }
-// fixed-order reductions over the lanes
-inline double lane_sum(VecD v) {
-  double s = v[0];
-  for (int l = 1; l < LANES; ++l) s += v[l];
-  return s;
-}
-inline double lane_min_of(VecD v) {
-  double m = v[0];
-  for (int l = 1; l < LANES; ++l) m = std::min(m, v[l]);
-  return m;
-}
+using lanes::any;
+using lanes::lane_bits;
+using lanes::lane_sum;
+using lanes::LANES;
+using lanes::load;
+using lanes::splat;
+using lanes::store;
+using lanes::VecD;
+using lanes::VecL;
 
 bool has_damping(const Model& model, const Eigen::VectorXd& q, const Eigen::VectorXd& v) {
   return v.size() == q.size() && (model.params.k_dt != 0 || model.params.k_dn != 0);
@@ -315,7 +285,7 @@ void ContactTerm::pair_kernel(const Model& model, int i, int j, RowStats& row) {
   }
   // the smallest squared distance over all lanes is < 4r² exactly when some pair is in
   // contact, and then it is the smallest over the pairs in contact
-  const double lane_min = lane_min_of(min_d2);
+  const double lane_min = lanes::lane_min(min_d2);
   if (lane_min < four_r2) row.min_d2 = std::min(row.min_d2, lane_min);
   long long n_contacts = 0;
   for (int l = 0; l < LANES; ++l) n_contacts += contacts[l];
