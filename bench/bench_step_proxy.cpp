@@ -11,14 +11,19 @@
 // trajectory. Two untimed warm-up steps build the BVH and the projection's symbolic
 // factorisation. Prints one JSON document: per run the median step (wall clock, and the
 // CPU time of all threads, which a shared machine inflates less), µs per segment-step,
-// seconds per stage per step, contact point pairs per step, projection iterations, CPU.
+// seconds per stage per step, heap allocations per step (operator new is counted),
+// contact point pairs per step, projection iterations, CPU.
 #include <tbb/global_control.h>
+#include <tbb/task_arena.h>
 
 #include <time.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <cstdlib>
 #include <iostream>
+#include <new>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -27,6 +32,54 @@
 #include "knit/contact/contact_samples.hpp"
 #include "knit/contact/contact_term.hpp"
 #include "knit/solver/simulator.hpp"
+
+// every heap allocation of this program is counted, to report allocations per step
+// (GCC 12 warns falsely that free() does not match these operator new replacements)
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
+#endif
+static std::atomic<long long> g_allocations{0};
+void* operator new(std::size_t size) {
+  ++g_allocations;
+  if (void* p = std::malloc(size ? size : 1)) return p;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t size) {
+  return operator new(size);
+}
+void* operator new(std::size_t size, std::align_val_t align) {
+  ++g_allocations;
+  const std::size_t a = static_cast<std::size_t>(align);
+  if (void* p = std::aligned_alloc(a, (size + a - 1) / a * a)) return p;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t size, std::align_val_t align) {
+  return operator new(size, align);
+}
+void operator delete(void* p) noexcept {
+  std::free(p);
+}
+void operator delete[](void* p) noexcept {
+  std::free(p);
+}
+void operator delete(void* p, std::size_t) noexcept {
+  std::free(p);
+}
+void operator delete[](void* p, std::size_t) noexcept {
+  std::free(p);
+}
+void operator delete(void* p, std::align_val_t) noexcept {
+  std::free(p);
+}
+void operator delete[](void* p, std::align_val_t) noexcept {
+  std::free(p);
+}
+void operator delete(void* p, std::size_t, std::align_val_t) noexcept {
+  std::free(p);
+}
+void operator delete[](void* p, std::size_t, std::align_val_t) noexcept {
+  std::free(p);
+}
 
 namespace {
 
@@ -89,65 +142,75 @@ int main(int argc, char** argv) {
       start.v = Eigen::VectorXd::Zero(start.q.size());
 
       for (const int threads : thread_counts) {
+        // an explicit arena per run: the main thread's implicit arena keeps the concurrency
+        // of its first use, so a global_control alone would not raise 1 thread to 2
         tbb::global_control control(tbb::global_control::max_allowed_parallelism, threads);
-        knit::Simulator sim(model);
-        auto* contact = dynamic_cast<knit::ContactTerm*>(sim.find_term("contact"));
-        if (contact) contact->set_candidate_margin(margin_radii * params.radius);
-        knit::State state = start;
-        for (int k = 0; k < 2; ++k)
-          if (!sim.step(state, h).ok()) throw std::runtime_error("warm-up step failed");
-        sim.reset_timings();
-        const long long evals0 = contact ? contact->evaluations() : 0;
-        const long long rebuilds0 = contact ? contact->candidate_rebuilds() : 0;
-        std::vector<double> step_s, cpu_s;
-        double contact_pairs = 0, candidates = 0, iterations = 0;
-        int max_iterations = 0;
-        for (int k = 0; k < steps; ++k) {
-          const double t0 = knit::bench::now_s(), c0 = process_cpu_s();
-          const knit::StepResult res = sim.step(state, h);
-          step_s.push_back(knit::bench::now_s() - t0);
-          cpu_s.push_back(process_cpu_s() - c0);
-          if (!res.ok()) throw std::runtime_error("step failed: " + res.message);
-          iterations += res.projection.iterations;
-          max_iterations = std::max(max_iterations, res.projection.iterations);
-          if (contact) {
-            contact_pairs += contact->last_stats().point_pairs_in_contact;
-            candidates += contact->last_stats().candidate_segment_pairs;
+        tbb::task_arena arena(threads);
+        arena.execute([&] {
+          knit::Simulator sim(model);
+          auto* contact = dynamic_cast<knit::ContactTerm*>(sim.find_term("contact"));
+          if (contact) contact->set_candidate_margin(margin_radii * params.radius);
+          knit::State state = start;
+          for (int k = 0; k < 2; ++k)
+            if (!sim.step(state, h).ok()) throw std::runtime_error("warm-up step failed");
+          sim.reset_timings();
+          const long long evals0 = contact ? contact->evaluations() : 0;
+          const long long rebuilds0 = contact ? contact->candidate_rebuilds() : 0;
+          std::vector<double> step_s, cpu_s;
+          long long allocations = 0;
+          double contact_pairs = 0, candidates = 0, iterations = 0;
+          int max_iterations = 0;
+          for (int k = 0; k < steps; ++k) {
+            const double t0 = knit::bench::now_s(), c0 = process_cpu_s();
+            const long long a0 = g_allocations.load();
+            const knit::StepResult res = sim.step(state, h);
+            allocations += g_allocations.load() - a0;
+            step_s.push_back(knit::bench::now_s() - t0);
+            cpu_s.push_back(process_cpu_s() - c0);
+            if (!res.ok()) throw std::runtime_error("step failed: " + res.message);
+            iterations += res.projection.iterations;
+            max_iterations = std::max(max_iterations, res.projection.iterations);
+            if (contact) {
+              contact_pairs += contact->last_stats().point_pairs_in_contact;
+              candidates += contact->last_stats().candidate_segment_pairs;
+            }
           }
-        }
-        double total = 0;
-        for (double s : step_s) total += s;
-        const double med = median(step_s);
-        nlohmann::ordered_json run;
-        run["sample"] = "knit_like_sample rows=" + std::to_string(rows) +
-                        " loops_per_row=" + std::to_string(per_row) + " squeeze=0.9";
-        run["segments"] = model.num_seg();
-        run["points_per_segment"] = points;
-        run["threads"] = threads;
-        run["step_ms_median"] = 1e3 * med;
-        run["step_ms_min"] = 1e3 * *std::min_element(step_s.begin(), step_s.end());
-        run["us_per_segment_step"] = 1e6 * med / model.num_seg();
-        // CPU time of all threads per step: with 1 thread, the step time on an idle core
-        run["cpu_ms_per_step_median"] = 1e3 * median(cpu_s);
-        nlohmann::ordered_json stages;
-        for (const auto& [name, seconds] : sim.stage_seconds()) stages[name] = 1e3 * seconds / steps;
-        run["stage_ms_per_step"] = stages;
-        run["other_ms_per_step"] = [&] {
-          double staged = 0;
-          for (const auto& [name, seconds] : sim.stage_seconds()) staged += seconds;
-          return 1e3 * (total - staged) / steps;
-        }();
-        run["contact_point_pairs_per_evaluation"] = contact_pairs / steps;
-        run["candidate_segment_pairs_per_evaluation"] = candidates / steps;
-        if (contact) {
-          run["contact_candidate_margin_cm"] = contact->candidate_margin();
-          run["contact_list_rebuilds_per_evaluation"] =
-              double(contact->candidate_rebuilds() - rebuilds0) /
-              double(std::max(1LL, contact->evaluations() - evals0));
-        }
-        run["projection_iterations_mean"] = iterations / steps;
-        run["projection_iterations_max"] = max_iterations;
-        out["runs"].push_back(run);
+          double total = 0;
+          for (double s : step_s) total += s;
+          const double med = median(step_s);
+          nlohmann::ordered_json run;
+          run["sample"] = "knit_like_sample rows=" + std::to_string(rows) +
+                          " loops_per_row=" + std::to_string(per_row) + " squeeze=0.9";
+          run["segments"] = model.num_seg();
+          run["points_per_segment"] = points;
+          run["threads"] = threads;
+          run["step_ms_median"] = 1e3 * med;
+          run["step_ms_min"] = 1e3 * *std::min_element(step_s.begin(), step_s.end());
+          run["us_per_segment_step"] = 1e6 * med / model.num_seg();
+          // CPU time of all threads per step: with 1 thread, the step time on an idle core
+          run["cpu_ms_per_step_median"] = 1e3 * median(cpu_s);
+          nlohmann::ordered_json stages;
+          for (const auto& [name, seconds] : sim.stage_seconds())
+            stages[name] = 1e3 * seconds / steps;
+          run["stage_ms_per_step"] = stages;
+          run["other_ms_per_step"] = [&] {
+            double staged = 0;
+            for (const auto& [name, seconds] : sim.stage_seconds()) staged += seconds;
+            return 1e3 * (total - staged) / steps;
+          }();
+          run["heap_allocations_per_step"] = double(allocations) / steps;
+          run["contact_point_pairs_per_evaluation"] = contact_pairs / steps;
+          run["candidate_segment_pairs_per_evaluation"] = candidates / steps;
+          if (contact) {
+            run["contact_candidate_margin_cm"] = contact->candidate_margin();
+            run["contact_list_rebuilds_per_evaluation"] =
+                double(contact->candidate_rebuilds() - rebuilds0) /
+                double(std::max(1LL, contact->evaluations() - evals0));
+          }
+          run["projection_iterations_mean"] = iterations / steps;
+          run["projection_iterations_max"] = max_iterations;
+          out["runs"].push_back(run);
+        });
       }
     }
     std::cout << out.dump(2) << "\n";
