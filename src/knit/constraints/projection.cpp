@@ -7,6 +7,7 @@
 #include <tuple>
 #include <utility>
 #include <cmath>
+#include <Eigen/OrderingMethods>
 #include <vector>
 
 #include "knit/constraints/inextensibility.hpp"
@@ -57,10 +58,14 @@ FastProjection::FastProjection(const Model& model) {
   build_normal_pattern(model.num_dof());
 }
 
-// The lower triangle of A = G M⁻¹ Gᵀ has a fixed pattern: A_rc ≠ 0 only when rows r and c
-// of G share a column k, and then A_rc = Σ_k G_rk G_ck / m_k over the shared columns. Every
-// lower entry gets the list of its terms (the value indices of G_rk and G_ck, and k), in
-// ascending k, so that assemble_normal_matrix is a flat, parallel loop over entries.
+// A = G M⁻¹ Gᵀ has a fixed pattern: A_rc ≠ 0 only when rows r and c of G share a column k,
+// and then A_rc = Σ_k G_rk G_ck / m_k over the shared columns. The fill-reducing ordering
+// (AMD, as SimplicialLDLT would choose) is computed once here and A is assembled already
+// permuted, Â = P A Pᵀ, upper triangle: then the natural-ordering factorisation reads it
+// in place, without the copy and permutation (and their allocations) a factorisation with
+// an ordering makes every time. Every entry of Â gets the list of its terms (value
+// indices of G_rk and G_ck, and k), in ascending k, so that assemble_normal_matrix is a
+// flat, parallel loop over entries.
 void FastProjection::build_normal_pattern(int num_dof) {
   // rows of G touching each column k, with the value index of G_rk
   std::vector<std::vector<std::pair<int, int>>> by_col(num_dof);
@@ -76,10 +81,35 @@ void FastProjection::build_normal_pattern(int num_dof) {
     for (const auto& [r, pr] : by_col[k])
       for (const auto& [c, pc] : by_col[k])
         if (r >= c) terms.push_back({c, r, k, pr, pc});
+  // the ordering, from the symmetric pattern (every row has a diagonal term)
+  {
+    std::vector<Eigen::Triplet<int>> structure;
+    for (const Term& t : terms) {
+      structure.emplace_back(t.row, t.col, 1);
+      structure.emplace_back(t.col, t.row, 1);
+    }
+    Eigen::SparseMatrix<int> pattern(m_rows, m_rows);
+    pattern.setFromTriplets(structure.begin(), structure.end());
+    Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> pinv;
+    Eigen::AMDOrdering<int>()(pattern, pinv);
+    // as SimplicialCholeskyBase::ordering: P = Pinv⁻¹, row r of A is row P(r) of Â
+    m_perm.resize(m_rows);
+    if (pinv.size() == m_rows) {
+      const Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> perm = pinv.inverse();
+      for (int r = 0; r < m_rows; ++r) m_perm[r] = perm.indices()[r];
+    } else {
+      for (int r = 0; r < m_rows; ++r) m_perm[r] = r;
+    }
+  }
+  // permuted upper triangle: (row, col) ← (min, max) of the permuted indices
+  for (Term& t : terms) {
+    const int pr = m_perm[t.row], pc = m_perm[t.col];
+    t.row = std::min(pr, pc);
+    t.col = std::max(pr, pc);
+  }
   std::sort(terms.begin(), terms.end(), [](const Term& a, const Term& b) {
     return std::tie(a.col, a.row, a.k) < std::tie(b.col, b.row, b.k);
   });
-  // every row has a diagonal term (its own columns), so the pattern holds the diagonal
   std::vector<Eigen::Triplet<double>> entries;
   for (size_t t = 0; t < terms.size(); ++t)
     if (t == 0 || terms[t].col != terms[t - 1].col || terms[t].row != terms[t - 1].row)
@@ -103,10 +133,13 @@ void FastProjection::build_normal_pattern(int num_dof) {
   assert(e + 1 == m_A.nonZeros());
   m_diag.resize(m_rows);
   for (int c = 0; c < m_rows; ++c) {
-    // the diagonal is the first (smallest-row) entry of its lower column
-    m_diag[c] = m_A.outerIndexPtr()[c];
+    // the diagonal is the last (largest-row) entry of its upper column
+    m_diag[c] = m_A.outerIndexPtr()[c + 1] - 1;
     assert(m_A.innerIndexPtr()[m_diag[c]] == c);
   }
+  m_cperm.resize(m_rows);
+  m_xperm.resize(m_rows);
+  m_dlambda.resize(m_rows);
 }
 
 void FastProjection::assemble_normal_matrix(const Model& model) {
@@ -194,8 +227,8 @@ ProjectionResult FastProjection::project(const Model& model, Eigen::VectorXd& q,
       res.converged = false;
       return res;
     }
-    // A = G M⁻¹ Gᵀ (lower triangle) into its fixed pattern; the symbolic factorisation
-    // is computed once
+    // Â = P G M⁻¹ Gᵀ Pᵀ (upper triangle) into its fixed pattern; the symbolic
+    // factorisation is computed once
     assemble_normal_matrix(model);
     if (!m_analyzed) {
       m_solver.analyzePattern(m_A);
@@ -206,7 +239,10 @@ ProjectionResult FastProjection::project(const Model& model, Eigen::VectorXd& q,
       res.converged = false;
       return res;
     }
-    m_dlambda = m_solver.solve(m_c);
+    // Â x̂ = P C, δλ = Pᵀ x̂
+    for (int r = 0; r < m_rows; ++r) m_cperm[m_perm[r]] = m_c[r];
+    m_xperm = m_solver.solve(m_cperm);
+    for (int r = 0; r < m_rows; ++r) m_dlambda[r] = m_xperm[m_perm[r]];
     q.noalias() -= model.inv_mass3.cwiseProduct(m_G.transpose() * m_dlambda);
     ++res.iterations;
     evaluate_impl(model, q, time, m_c, true);

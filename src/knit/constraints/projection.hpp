@@ -5,9 +5,11 @@
 // per pin (y(s) − p(time), cm), three per glue (y(a) − y(b), cm).
 //
 // Cost per iteration: one pass of the constraint kernel gives C and the rows of G at once;
-// A = G M⁻¹ Gᵀ is assembled in parallel straight into a pattern fixed at construction
-// (per entry, a precomputed list of the products that make it); the symbolic
-// factorisation is computed once; factorisation and solve are Eigen's SimplicialLDLT.
+// A = G M⁻¹ Gᵀ is assembled in parallel, already in the fill-reducing (AMD) order, straight
+// into a pattern fixed at construction (per entry, a precomputed list of the products that
+// make it); the symbolic factorisation is computed once; factorisation (in place, no
+// allocation up to ≈16,000 rows, Eigen's stack limit) and solve are Eigen's SimplicialLDLT.
+#include <Eigen/OrderingMethods>
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 #include <vector>
@@ -47,12 +49,17 @@ class FastProjection {
   int m_len_rows = 0;
   int m_rows = 0;
   Eigen::SparseMatrix<double, Eigen::RowMajor> m_G;
-  Eigen::SparseMatrix<double> m_A;        // lower triangle of G M⁻¹ Gᵀ (+ ridge), fixed pattern
+  // Â = P G M⁻¹ Gᵀ Pᵀ (+ ridge), upper triangle, fixed pattern; P is the AMD ordering
+  Eigen::SparseMatrix<double> m_A;
+  std::vector<int> m_perm;                // row r of A is row m_perm[r] of Â
   std::vector<NormalTerm> m_terms;        // the terms of every entry of m_A, entry by entry
   std::vector<int> m_term_begin;          // entry e's terms: [m_term_begin[e], [e + 1])
-  std::vector<Eigen::Index> m_diag;       // value index of A_cc
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> m_solver;  // reads the lower triangle
+  std::vector<Eigen::Index> m_diag;       // value index of Â_cc
+  // already ordered: factorises Â in place (no copy per factorisation)
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Upper, Eigen::NaturalOrdering<int>>
+      m_solver;
   bool m_analyzed = false;
+  Eigen::VectorXd m_cperm, m_xperm;
   Eigen::VectorXd m_c, m_dlambda;
 };
 

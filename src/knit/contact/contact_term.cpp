@@ -366,6 +366,9 @@ double ContactTerm::add_force_bvh(const Model& model, const Eigen::VectorXd& q,
           if (j != i && !model.neighbours(i, j)) partners.push_back(j);
         });
         std::sort(partners.begin(), partners.end());
+        // headroom, so that later rebuilds rarely allocate
+        if (partners.capacity() < partners.size() + partners.size() / 4)
+          partners.reserve(partners.size() + partners.size() / 2);
       }
     });
     m_timings.traverse = seconds_since(t);
