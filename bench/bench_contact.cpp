@@ -5,8 +5,8 @@
 //
 // Prints one JSON document: sizes, culling counts, stage times of the median evaluation
 // and the CPU model. Evaluations keep the candidate list; refit and traverse times, and
-// evaluation_with_list_rebuild_ms, are those of evaluations that rebuild it. The BVH build happens once, on a first evaluation that is not timed
-// with the others.
+// evaluation_with_list_rebuild_ms, are those of evaluations that rebuild it. The BVH build happens
+// once, on a first evaluation that is not timed with the others.
 #include <tbb/global_control.h>
 
 #include <time.h>

@@ -92,7 +92,6 @@ TEST(Projection, GlueAndMovingPinAreSatisfied) {
   EXPECT_LT((point_position(m, q, {27, 0.5}) - point_position(m, q, {10, 0.5})).norm(), 1e-6);
 }
 
-
 // largest |entry| (a plain loop: GCC 12 warns falsely inside Eigen's AVX-512 max reduction)
 double max_abs_of(const Eigen::VectorXd& v) {
   double m = 0;
@@ -118,7 +117,8 @@ int dense_projection(const Model& m, Eigen::VectorXd& q, double time) {
     auto add_point = [&](const YarnPoint& p, double sign) {
       const Eigen::Vector4d b = bspline_basis(p.t);
       for (int a = 0; a < 4; ++a)
-        g.block<3, 3>(r, 3 * (m.seg_cp[p.segment] + a)) += sign * b[a] * Eigen::Matrix3d::Identity();
+        g.block<3, 3>(r, 3 * (m.seg_cp[p.segment] + a)) +=
+            sign * b[a] * Eigen::Matrix3d::Identity();
     };
     for (const Pin& pin : m.pins) {
       c.segment<3>(r) = point_position(m, x, pin.at) - pin.target(time);

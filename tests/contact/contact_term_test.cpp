@@ -189,8 +189,8 @@ TEST(ContactTerm, BvhMatchesBruteForceWithOddPointCountsAndWithoutDamping) {
       if (!damping) p.k_dt = p.k_dn = 0;
       const Sample s = make(random_tangle(3, 25, 2.5, 30 + points), p);
       const Eigen::VectorXd v = random_vector(s.q.size(), 3.0, 50 + points);
-      expect_bvh_matches_brute(s, v,
-                               std::to_string(points) + " points" + (damping ? "" : ", no damping"));
+      expect_bvh_matches_brute(
+          s, v, std::to_string(points) + " points" + (damping ? "" : ", no damping"));
     }
   }
 }
@@ -234,8 +234,8 @@ TEST(ContactTerm, KeptCandidateListGivesBitwiseTheSameForcesAsARebuild) {
       ContactTerm fresh(s.model);
       const Eigen::VectorXd f_fresh = force_of(fresh, s, v, &e_fresh);
       const ContactStats &a = kept.last_stats(), &b = fresh.last_stats();
-      const std::string what = "margin " + std::to_string(margin_radii) + " r, step " +
-                               std::to_string(step);
+      const std::string what =
+          "margin " + std::to_string(margin_radii) + " r, step " + std::to_string(step);
       ASSERT_GT(b.point_pairs_in_contact, 0) << what;
       (a.candidates_rebuilt ? rebuilt : reused) += 1;
       EXPECT_EQ(e_kept, e_fresh) << what;
@@ -243,7 +243,8 @@ TEST(ContactTerm, KeptCandidateListGivesBitwiseTheSameForcesAsARebuild) {
       EXPECT_EQ(a.point_pairs_tested, b.point_pairs_tested) << what;
       EXPECT_EQ(a.point_pairs_in_contact, b.point_pairs_in_contact) << what;
       EXPECT_EQ(a.min_distance_ratio, b.min_distance_ratio) << what;
-      for (int k = 0; k < f_kept.size(); ++k) ASSERT_EQ(f_kept[k], f_fresh[k]) << what << ": " << dof_name(k);
+      for (int k = 0; k < f_kept.size(); ++k)
+        ASSERT_EQ(f_kept[k], f_fresh[k]) << what << ": " << dof_name(k);
       // a drift of 0.048 r per axis per step plus jitter: with δ/2 = 0.125 r a rebuild
       // every 2 or 3 steps, with δ/2 = 0.25 r every 5, with δ/2 = 0.5 r after about 9
       s.q += 0.006 * drift + random_vector(s.q.size(), 0.001, 300 + step);

@@ -16,7 +16,8 @@ constexpr size_t COINCIDENT = 10;  // index of the segment with coincident contr
 
 std::vector<Vector12d> varied_segments() {
   std::vector<Vector12d> segs;
-  for (unsigned seed = 1; seed <= 9; ++seed) segs.push_back(test::jitter(Vector12d::Zero(), 0.4, seed));
+  for (unsigned seed = 1; seed <= 9; ++seed)
+    segs.push_back(test::jitter(Vector12d::Zero(), 0.4, seed));
   Vector12d straight, coincident, partly;
   for (int a = 0; a < 4; ++a) {
     straight.segment<3>(3 * a) = Eigen::Vector3d(0.3 * a, 0.1 * a, -0.05 * a);
@@ -78,25 +79,19 @@ void expect_lanes_match_plain(Plain plain, Lanes lane_kernel, const std::string&
 }
 
 TEST(EnergyLanes, BendingLanesMatchPlainKernel) {
-  expect_lanes_match_plain(
-      [](const Vector12d& x, double l, const QuadratureTable& q, Vector12d* g) {
-        return bending_kernel(x, l, 5.0, q, g);
-      },
-      [](const lanes::VecD* x, lanes::VecD l, const QuadratureTable& q, lanes::VecD* g) {
-        return bending_kernel_lanes(x, l, 5.0, q, g);
-      },
-      "bending");
+  expect_lanes_match_plain([](const Vector12d& x, double l, const QuadratureTable& q,
+                              Vector12d* g) { return bending_kernel(x, l, 5.0, q, g); },
+                           [](const lanes::VecD* x, lanes::VecD l, const QuadratureTable& q,
+                              lanes::VecD* g) { return bending_kernel_lanes(x, l, 5.0, q, g); },
+                           "bending");
 }
 
 TEST(EnergyLanes, LengthLanesMatchPlainKernel) {
-  expect_lanes_match_plain(
-      [](const Vector12d& x, double l, const QuadratureTable& q, Vector12d* g) {
-        return length_kernel(x, l, 2000.0, q, g);
-      },
-      [](const lanes::VecD* x, lanes::VecD l, const QuadratureTable& q, lanes::VecD* g) {
-        return length_kernel_lanes(x, l, 2000.0, q, g);
-      },
-      "length");
+  expect_lanes_match_plain([](const Vector12d& x, double l, const QuadratureTable& q,
+                              Vector12d* g) { return length_kernel(x, l, 2000.0, q, g); },
+                           [](const lanes::VecD* x, lanes::VecD l, const QuadratureTable& q,
+                              lanes::VecD* g) { return length_kernel_lanes(x, l, 2000.0, q, g); },
+                           "length");
 }
 
 // the assembled terms (lane kernels, a partial last group of four) against a plain
@@ -113,7 +108,8 @@ TEST(EnergyLanes, AssembledTermsMatchPlainAssembly) {
   const Eigen::VectorXd v = Eigen::VectorXd::Zero(q.size());
   for (const bool bending : {true, false}) {
     Eigen::VectorXd f = Eigen::VectorXd::Zero(q.size()), plain = f;
-    const double e = bending ? BendingEnergy().add_force(m, q, v, f) : LengthEnergy().add_force(m, q, v, f);
+    const double e =
+        bending ? BendingEnergy().add_force(m, q, v, f) : LengthEnergy().add_force(m, q, v, f);
     double e_plain = 0;
     for (int i = 0; i < m.num_seg(); ++i) {
       Vector12d g = Vector12d::Zero();
@@ -126,7 +122,8 @@ TEST(EnergyLanes, AssembledTermsMatchPlainAssembly) {
     EXPECT_NEAR(e, e_plain, 1e-12 * std::abs(e_plain)) << what;
     const double scale = max_abs(plain);
     ASSERT_GT(scale, 0) << what;
-    for (Eigen::Index k = 0; k < q.size(); ++k) EXPECT_NEAR(f[k], plain[k], 1e-12 * scale) << what << ", coordinate " << k;
+    for (Eigen::Index k = 0; k < q.size(); ++k)
+      EXPECT_NEAR(f[k], plain[k], 1e-12 * scale) << what << ", coordinate " << k;
   }
 }
 

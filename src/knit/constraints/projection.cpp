@@ -2,12 +2,12 @@
 
 #include <tbb/parallel_for.h>
 
+#include <Eigen/OrderingMethods>
 #include <algorithm>
 #include <cassert>
+#include <cmath>
 #include <tuple>
 #include <utility>
-#include <cmath>
-#include <Eigen/OrderingMethods>
 #include <vector>
 
 #include "knit/constraints/inextensibility.hpp"
@@ -210,8 +210,7 @@ double FastProjection::max_length_violation(const Model& model, const Eigen::Vec
   double worst = 0;
   for (int i = 0; i < model.num_seg(); ++i)
     worst = std::max(worst, std::abs(length_constraint(gather_segment(q, model.seg_cp[i]),
-                                                       model.rest_length[i], model.quad,
-                                                       nullptr)));
+                                                       model.rest_length[i], model.quad, nullptr)));
   return worst;
 }
 
@@ -223,7 +222,8 @@ ProjectionResult FastProjection::project(const Model& model, Eigen::VectorXd& q,
   evaluate_impl(model, q, time, m_c, true);
   res.max_violation = max_abs(m_c);
   while (res.max_violation > tol) {
-    if (res.iterations >= model.params.max_projection_iterations || !std::isfinite(res.max_violation)) {
+    if (res.iterations >= model.params.max_projection_iterations ||
+        !std::isfinite(res.max_violation)) {
       res.converged = false;
       return res;
     }

@@ -42,8 +42,8 @@ class FastProjection {
   struct NormalTerm {
     int ga, gb, k;
   };
-  void evaluate_impl(const Model& model, const Eigen::VectorXd& q, double time,
-                     Eigen::VectorXd& c, bool jacobian);
+  void evaluate_impl(const Model& model, const Eigen::VectorXd& q, double time, Eigen::VectorXd& c,
+                     bool jacobian);
   void build_normal_pattern(int num_dof);
   void assemble_normal_matrix(const Model& model);
   int m_len_rows = 0;
@@ -51,10 +51,10 @@ class FastProjection {
   Eigen::SparseMatrix<double, Eigen::RowMajor> m_G;
   // Â = P G M⁻¹ Gᵀ Pᵀ (+ ridge), upper triangle, fixed pattern; P is the AMD ordering
   Eigen::SparseMatrix<double> m_A;
-  std::vector<int> m_perm;                // row r of A is row m_perm[r] of Â
-  std::vector<NormalTerm> m_terms;        // the terms of every entry of m_A, entry by entry
-  std::vector<int> m_term_begin;          // entry e's terms: [m_term_begin[e], [e + 1])
-  std::vector<Eigen::Index> m_diag;       // value index of Â_cc
+  std::vector<int> m_perm;           // row r of A is row m_perm[r] of Â
+  std::vector<NormalTerm> m_terms;   // the terms of every entry of m_A, entry by entry
+  std::vector<int> m_term_begin;     // entry e's terms: [m_term_begin[e], [e + 1])
+  std::vector<Eigen::Index> m_diag;  // value index of Â_cc
   // already ordered: factorises Â in place (no copy per factorisation)
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Upper, Eigen::NaturalOrdering<int>>
       m_solver;

@@ -103,46 +103,45 @@ void ContactTerm::tabulate_points(const Model& model, const Eigen::VectorXd& q,
   const int P = m_points;
   const bool with_v = has_damping(model, q, v);
   const bool check_motion = m_list_valid && m_culling == ContactCulling::BVH;
-  tbb::parallel_for(tbb::blocked_range<int>(0, m_num_seg, 128),
-                    [&](const tbb::blocked_range<int>& range) {
-                      for (int s = range.begin(); s < range.end(); ++s) {
-                        const Vector12d x = gather_segment(q, model.seg_cp[s]);
-                        Aabb box;
-                        for (int a = 0; a < P; ++a) {
-                          const Eigen::Vector3d p = combine(x, quad.b[a]);
-                          const size_t k = static_cast<size_t>(s) * P + a;
-                          m_px[k] = p[0];
-                          m_py[k] = p[1];
-                          m_pz[k] = p[2];
-                          box.extend(p);
-                        }
-                        m_boxes[s] = box.grown(r);
-                        if (check_motion) {
-                          // largest per-axis displacement of the segment's points since the
-                          // candidate list was built
-                          // (+inf for a non-finite point: it forces a rebuild)
-                          double moved = 0;
-                          bool finite = true;
-                          for (int a = 0; a < P; ++a) {
-                            const size_t k = static_cast<size_t>(s) * P + a;
-                            moved = std::max({moved, std::abs(m_px[k] - m_lx[k]),
-                                              std::abs(m_py[k] - m_ly[k]),
-                                              std::abs(m_pz[k] - m_lz[k])});
-                            finite = finite && std::isfinite(m_px[k] + m_py[k] + m_pz[k]);
-                          }
-                          m_seg_moved[s] = finite ? moved : std::numeric_limits<double>::infinity();
-                        }
-                        if (!with_v) continue;
-                        const Vector12d u = gather_segment(v, model.seg_cp[s]);
-                        for (int a = 0; a < P; ++a) {
-                          const Eigen::Vector3d w = combine(u, quad.b[a]);
-                          const size_t k = static_cast<size_t>(s) * P + a;
-                          m_vx[k] = w[0];
-                          m_vy[k] = w[1];
-                          m_vz[k] = w[2];
-                        }
-                      }
-                    });
+  tbb::parallel_for(
+      tbb::blocked_range<int>(0, m_num_seg, 128), [&](const tbb::blocked_range<int>& range) {
+        for (int s = range.begin(); s < range.end(); ++s) {
+          const Vector12d x = gather_segment(q, model.seg_cp[s]);
+          Aabb box;
+          for (int a = 0; a < P; ++a) {
+            const Eigen::Vector3d p = combine(x, quad.b[a]);
+            const size_t k = static_cast<size_t>(s) * P + a;
+            m_px[k] = p[0];
+            m_py[k] = p[1];
+            m_pz[k] = p[2];
+            box.extend(p);
+          }
+          m_boxes[s] = box.grown(r);
+          if (check_motion) {
+            // largest per-axis displacement of the segment's points since the
+            // candidate list was built
+            // (+inf for a non-finite point: it forces a rebuild)
+            double moved = 0;
+            bool finite = true;
+            for (int a = 0; a < P; ++a) {
+              const size_t k = static_cast<size_t>(s) * P + a;
+              moved = std::max({moved, std::abs(m_px[k] - m_lx[k]), std::abs(m_py[k] - m_ly[k]),
+                                std::abs(m_pz[k] - m_lz[k])});
+              finite = finite && std::isfinite(m_px[k] + m_py[k] + m_pz[k]);
+            }
+            m_seg_moved[s] = finite ? moved : std::numeric_limits<double>::infinity();
+          }
+          if (!with_v) continue;
+          const Vector12d u = gather_segment(v, model.seg_cp[s]);
+          for (int a = 0; a < P; ++a) {
+            const Eigen::Vector3d w = combine(u, quad.b[a]);
+            const size_t k = static_cast<size_t>(s) * P + a;
+            m_vx[k] = w[0];
+            m_vy[k] = w[1];
+            m_vz[k] = w[2];
+          }
+        }
+      });
   // the maximum is exact, so the order does not matter
   m_list_moved = 0;
   if (check_motion)
@@ -221,7 +220,7 @@ void ContactTerm::pair_kernel(const Model& model, int i, int j, RowStats& row) {
   const VecD four_r2_v = splat(four_r2), inv_four_r2_v = splat(inv_four_r2);
   const VecD zero = splat(0.0), one = splat(1.0), two = splat(2.0);
   VecD energy = zero, min_d2 = splat(std::numeric_limits<double>::infinity());
-  VecL contacts = VecL{} ;
+  VecL contacts = VecL{};
   for (int ka = 0; ka < na; ++ka) {
     const int a = ia[ka];
     const VecD ax = splat(m_px[bi + a]), ay = splat(m_py[bi + a]), az = splat(m_pz[bi + a]);
@@ -244,7 +243,7 @@ void ContactTerm::pair_kernel(const Model& model, int i, int j, RowStats& row) {
       const VecD inv_d2 = one / d2;
       const VecD inv_dd = four_r2_v * inv_d2;  // 1/d²
       const VecD w = load(bw + kb);
-      const VecD kw = kla * w;                 // k ℓℓ ww
+      const VecD kw = kla * w;  // k ℓℓ ww
       // f(d) = 1/d² + d² − 2; the force on y_j(t_b) is g Δy (+ damping)
       energy += in ? kw * (inv_dd + d2 * inv_four_r2_v - two) : zero;
       VecD g = -two * inv_four_r2_v * kw * (one - inv_dd * inv_dd);
@@ -320,7 +319,8 @@ int ContactTerm::points_inside(const Aabb& box, size_t base, int* out) const {
   int n = 0;
   for (int a0 = 0; a0 < m_points; a0 += LANES) {
     const VecD x = load(&m_px[base + a0]), y = load(&m_py[base + a0]), z = load(&m_pz[base + a0]);
-    unsigned bits = lane_bits((x >= lx) & (x <= hx) & (y >= ly) & (y <= hy) & (z >= lz) & (z <= hz));
+    unsigned bits =
+        lane_bits((x >= lx) & (x <= hx) & (y >= ly) & (y <= hy) & (z >= lz) & (z <= hz));
     if (m_points - a0 < LANES) bits &= (1u << (m_points - a0)) - 1;
     for (; bits; bits &= bits - 1) out[n++] = a0 + std::countr_zero(bits);
   }

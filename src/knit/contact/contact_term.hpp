@@ -15,7 +15,8 @@
 //      segment pairs. This list is kept (Verlet-list style) across evaluations — both
 //      midpoint evaluations of a step and following steps — until some contact point has
 //      moved more than δ/2 along some axis since it was built (δ = candidate_margin());
-//   4. kernel: for each candidate pair (i < j) whose current boxes overlap, only the points of i inside box_j grown by
+//   4. kernel: for each candidate pair (i < j) whose current boxes overlap, only the points of i
+//   inside box_j grown by
 //      r (and of j inside box_i grown by r) can be within 2r of the other segment; those
 //      point pairs are tested densely and the pair's forces are stored if any is in contact;
 //   5. gather: every segment sums its pair forces in a fixed order, then every control
@@ -161,7 +162,7 @@ class ContactTerm : public Term {
   std::vector<std::array<double, 4>> m_basis;  // B_0..3(t_a) per contact point
   std::vector<Aabb> m_boxes;
   Bvh m_bvh;
-  std::vector<std::vector<int>> m_partners;     // per segment: candidates, sorted
+  std::vector<std::vector<int>> m_partners;  // per segment: candidates, sorted
   // the candidate list: margin δ, points and grown boxes when it was built, and how far
   // the points moved since (largest per-axis displacement, per segment and overall)
   double m_margin = 0;

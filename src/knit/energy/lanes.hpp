@@ -15,14 +15,18 @@ constexpr int LANES = 4;
 typedef double VecD __attribute__((vector_size(LANES * sizeof(double))));
 typedef long long VecL __attribute__((vector_size(LANES * sizeof(long long))));
 
-inline VecD splat(double x) { return VecD{} + x; }
+inline VecD splat(double x) {
+  return VecD{} + x;
+}
 /// Loads/stores LANES doubles from/to any address.
 inline VecD load(const double* p) {
   VecD v;
   std::memcpy(&v, p, sizeof v);
   return v;
 }
-inline void store(double* p, VecD v) { std::memcpy(p, &v, sizeof v); }
+inline void store(double* p, VecD v) {
+  std::memcpy(p, &v, sizeof v);
+}
 /// Fixed-order reductions over the lanes.
 inline double lane_sum(VecD v) {
   double s = v[0];
@@ -45,7 +49,9 @@ inline unsigned lane_bits(VecL m) {
 #endif
 }
 /// Whether any lane of a comparison result is true.
-inline bool any(VecL m) { return lane_bits(m) != 0; }
+inline bool any(VecL m) {
+  return lane_bits(m) != 0;
+}
 /// Lane-wise square root (the element-wise loop compiles to one vector instruction).
 inline VecD sqrt(VecD v) {
 #if defined(__AVX__)

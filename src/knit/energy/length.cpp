@@ -47,11 +47,12 @@ double LengthEnergy::add_force(const Model& model, const Eigen::VectorXd& q,
                                const Eigen::VectorXd& v, Eigen::VectorXd& force) {
   const double k = model.params.k_len;
   // four segments per call of the lane kernel (tested against length_kernel)
-  const double e = m_acc.run_lanes(model, q, [&](const lanes::VecD* x, const int* seg, lanes::VecD* g) {
-    lanes::VecD rest;
-    for (int l = 0; l < lanes::LANES; ++l) rest[l] = model.rest_length[seg[l]];
-    return length_kernel_lanes(x, rest, k, model.quad, g);
-  });
+  const double e =
+      m_acc.run_lanes(model, q, [&](const lanes::VecD* x, const int* seg, lanes::VecD* g) {
+        lanes::VecD rest;
+        for (int l = 0; l < lanes::LANES; ++l) rest[l] = model.rest_length[seg[l]];
+        return length_kernel_lanes(x, rest, k, model.quad, g);
+      });
   m_acc.gather(model, force, -1.0);
   return e;
 }
