@@ -6,6 +6,8 @@
 #include "knit/constraints/projection.hpp"
 
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
+#include <tbb/task_arena.h>
 
 #include "fd_check.hpp"
 #include "knit/constraints/inextensibility.hpp"
@@ -176,6 +178,29 @@ TEST(Projection, MatchesDenseOracle) {
     for (Eigen::Index k = 0; k < q0.size(); ++k)
       EXPECT_NEAR(q_fast[k], q_dense[k], 1e-9 * scale) << "seed " << seed << ", coordinate " << k;
   }
+}
+
+// the parallel assembly (per entry, fixed term order) makes the projection bitwise
+// independent of the thread count
+TEST(Projection, DoesNotDependOnThreadCount) {
+  ModelBuilder b;
+  for (int y = 0; y < 6; ++y)
+    b.add_yarn(wavy(300, 0.3 * y).colwise() + Eigen::Vector3d(0, 2.0 * y, 0));
+  b.add_glue({{10, 0.5}, {300 + 10, 0.5}});
+  const Model m = b.build(Params{});
+  const Eigen::VectorXd q0 = test::jitter(b.positions(), 0.02, 40);
+  // an explicit arena: a global_control alone does not raise the concurrency of the
+  // thread's implicit arena after its first use
+  auto project = [&](int threads) {
+    tbb::global_control control(tbb::global_control::max_allowed_parallelism, threads);
+    FastProjection proj(m);
+    Eigen::VectorXd q = q0;
+    tbb::task_arena(threads).execute([&] { EXPECT_TRUE(proj.project(m, q, 0.0).converged); });
+    return q;
+  };
+  const Eigen::VectorXd q1 = project(1), q2 = project(2);
+  ASSERT_GT(max_abs_of(q1 - q0), 1e-4);
+  for (Eigen::Index k = 0; k < q0.size(); ++k) ASSERT_EQ(q1[k], q2[k]) << "coordinate " << k;
 }
 
 }  // namespace

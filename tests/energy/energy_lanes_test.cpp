@@ -2,10 +2,13 @@
 // replaced in the assembled terms: same energies and gradients up to round-off, on varied
 // segments including the degenerate ones (straight yarn, coincident control points).
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
+#include <tbb/task_arena.h>
 
 #include <string>
 
 #include "fd_check.hpp"
+#include "knit/contact/contact_samples.hpp"
 #include "knit/energy/bending.hpp"
 #include "knit/energy/length.hpp"
 
@@ -125,6 +128,30 @@ TEST(EnergyLanes, AssembledTermsMatchPlainAssembly) {
     for (Eigen::Index k = 0; k < q.size(); ++k)
       EXPECT_NEAR(f[k], plain[k], 1e-12 * scale) << what << ", coordinate " << k;
   }
+}
+
+// the assembled terms are bitwise independent of the thread count (per-segment slots, a
+// fixed summation order)
+TEST(EnergyLanes, AssembledTermsDoNotDependOnThreadCount) {
+  const ModelBuilder b = knit_like_sample(4, 4, 8, 0.125, 0.9);
+  const Model m = b.build(Params{});
+  const Eigen::VectorXd q = test::jitter(b.positions(), 0.01, 4);
+  const Eigen::VectorXd v = Eigen::VectorXd::Zero(q.size());
+  // an explicit arena: a global_control alone does not raise the concurrency of the
+  // thread's implicit arena after its first use
+  auto forces = [&](int threads) {
+    tbb::global_control control(tbb::global_control::max_allowed_parallelism, threads);
+    Eigen::VectorXd f = Eigen::VectorXd::Zero(q.size());
+    double e = 0;
+    tbb::task_arena(threads).execute(
+        [&] { e = BendingEnergy().add_force(m, q, v, f) + LengthEnergy().add_force(m, q, v, f); });
+    return std::make_pair(e, f);
+  };
+  const auto [e1, f1] = forces(1);
+  const auto [e2, f2] = forces(2);
+  EXPECT_EQ(e1, e2);
+  ASSERT_GT(max_abs(f1), 0);
+  for (Eigen::Index k = 0; k < q.size(); ++k) ASSERT_EQ(f1[k], f2[k]) << "coordinate " << k;
 }
 
 }  // namespace
