@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <tbb/global_control.h>
+#include <tbb/task_arena.h>
 #include <Eigen/Geometry>
 
 #include <cmath>
@@ -179,6 +180,90 @@ TEST(ContactTerm, BvhMatchesBruteForceAfterRefit) {
   expect_bvh_matches_brute(s, v, "tangle after refit", &s0.q);
 }
 
+TEST(ContactTerm, BvhMatchesBruteForceWithOddPointCountsAndWithoutDamping) {
+  // the vectorised kernel pads the points of a segment to whole vectors, and has a path
+  // without damping (k_dt = k_dn = 0): cover both against the plain dense kernel
+  for (int points : {1, 3, 7, 13, 20}) {
+    for (bool damping : {true, false}) {
+      Params p;
+      p.contact_points = points;
+      if (!damping) p.k_dt = p.k_dn = 0;
+      const Sample s = make(random_tangle(3, 25, 2.5, 30 + points), p);
+      const Eigen::VectorXd v = random_vector(s.q.size(), 3.0, 50 + points);
+      expect_bvh_matches_brute(
+          s, v, std::to_string(points) + " points" + (damping ? "" : ", no damping"));
+    }
+  }
+}
+
+TEST(ContactTerm, KeptCandidateListMatchesBruteForceAfterSmallMotion) {
+  // built at s0, evaluated after every control point moved by less than δ/2 per axis (so
+  // every contact point did too: they are convex combinations): the list is kept
+  const Sample s0 = make(knit_like_sample(4, 4, 8, 0.125, 0.9));
+  const double half_margin = 0.5 * ContactTerm::DEFAULT_MARGIN_RADII * 0.125;
+  Sample s = s0;
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> uni(-0.95 * half_margin, 0.95 * half_margin);
+  for (Eigen::Index k = 0; k < s.q.size(); ++k) s.q[k] += uni(rng);
+  const Eigen::VectorXd v = random_vector(s.q.size(), 3.0, 6);
+  expect_bvh_matches_brute(s, v, "knit sample, kept list", &s0.q);
+  ContactTerm term(s.model);
+  Eigen::VectorXd f = Eigen::VectorXd::Zero(s.q.size());
+  term.add_force(s.model, s0.q, v, f);
+  EXPECT_TRUE(term.last_stats().candidates_rebuilt);
+  term.add_force(s.model, s.q, v, f);
+  EXPECT_FALSE(term.last_stats().candidates_rebuilt) << "the motion was below δ/2";
+}
+
+// Verlet-list reuse is exact: along a drifting, jittered trajectory, a term that keeps its
+// candidate list between rebuilds gives bitwise the same forces, energy and counts as a
+// fresh term (which always builds a new list), with the list both kept and rebuilt.
+TEST(ContactTerm, KeptCandidateListGivesBitwiseTheSameForcesAsARebuild) {
+  for (double margin_radii : {0.25, ContactTerm::DEFAULT_MARGIN_RADII, 1.0, 0.0}) {
+    const Sample s0 = make(knit_like_sample(4, 5, 8, 0.125, 0.85));
+    const double margin = margin_radii * 0.125;
+    ContactTerm kept(s0.model);
+    kept.set_candidate_margin(margin);
+    EXPECT_EQ(kept.candidate_margin(), margin);
+    Sample s = s0;
+    const Eigen::VectorXd drift = random_vector(s.q.size(), 1.0, 77).cwiseSign();
+    int reused = 0, rebuilt = 0;
+    for (int step = 0; step < 16; ++step) {
+      const Eigen::VectorXd v = random_vector(s.q.size(), 3.0, 200 + step);
+      double e_kept = 0, e_fresh = 0;
+      const Eigen::VectorXd f_kept = force_of(kept, s, v, &e_kept);
+      ContactTerm fresh(s.model);
+      const Eigen::VectorXd f_fresh = force_of(fresh, s, v, &e_fresh);
+      const ContactStats &a = kept.last_stats(), &b = fresh.last_stats();
+      const std::string what =
+          "margin " + std::to_string(margin_radii) + " r, step " + std::to_string(step);
+      ASSERT_GT(b.point_pairs_in_contact, 0) << what;
+      (a.candidates_rebuilt ? rebuilt : reused) += 1;
+      EXPECT_EQ(e_kept, e_fresh) << what;
+      EXPECT_EQ(a.candidate_segment_pairs, b.candidate_segment_pairs) << what;
+      EXPECT_EQ(a.point_pairs_tested, b.point_pairs_tested) << what;
+      EXPECT_EQ(a.point_pairs_in_contact, b.point_pairs_in_contact) << what;
+      EXPECT_EQ(a.min_distance_ratio, b.min_distance_ratio) << what;
+      for (int k = 0; k < f_kept.size(); ++k)
+        ASSERT_EQ(f_kept[k], f_fresh[k]) << what << ": " << dof_name(k);
+      // a drift of 0.048 r per axis per step plus jitter: with δ/2 = 0.125 r a rebuild
+      // every 2 or 3 steps, with δ/2 = 0.25 r every 5, with δ/2 = 0.5 r after about 9
+      s.q += 0.006 * drift + random_vector(s.q.size(), 0.001, 300 + step);
+    }
+    if (margin > 0) {
+      EXPECT_GT(reused, 0) << "margin " << margin_radii << " r: never kept";
+    }
+    EXPECT_GT(rebuilt, 1) << "margin " << margin_radii << " r: never rebuilt";
+  }
+}
+
+TEST(ContactTerm, RejectsANegativeCandidateMargin) {
+  const Sample s = pressed_patch();
+  ContactTerm term(s.model);
+  EXPECT_THROW(term.set_candidate_margin(-0.01), std::invalid_argument);
+  EXPECT_THROW(term.set_candidate_margin(std::nan("")), std::invalid_argument);
+}
+
 TEST(ContactTerm, ResultsDoNotDependOnThreadCount) {
   const Sample s = make(knit_like_sample(6, 6, 8, 0.125, 0.9));
   const Eigen::VectorXd v = random_vector(s.q.size(), 3.0, 21);
@@ -192,11 +277,15 @@ TEST(ContactTerm, ResultsDoNotDependOnThreadCount) {
     st1 = term.last_stats();
   }
   {
+    // an explicit arena: a global_control alone does not raise the concurrency of the
+    // thread's implicit arena after its first use (with 1 thread above)
     tbb::global_control two(tbb::global_control::max_allowed_parallelism, 2);
-    ContactTerm term(s.model);
-    force_of(term, s, v);  // a second evaluation runs the refit path
-    f2 = force_of(term, s, v, &e2);
-    st2 = term.last_stats();
+    tbb::task_arena(2).execute([&] {
+      ContactTerm term(s.model);
+      force_of(term, s, v);  // the second evaluation keeps the candidate list
+      f2 = force_of(term, s, v, &e2);
+      st2 = term.last_stats();
+    });
   }
   ASSERT_GT(st1.point_pairs_in_contact, 0);
   EXPECT_EQ(e1, e2);

@@ -3,6 +3,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <bit>
 #include <cassert>
 #include <chrono>
 #include <cmath>
@@ -10,6 +11,7 @@
 #include <string>
 
 #include "knit/contact/contact_kernel.hpp"
+#include "knit/energy/lanes.hpp"
 
 namespace knit {
 namespace {
@@ -20,13 +22,24 @@ double seconds_since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
+using lanes::any;
+using lanes::lane_bits;
+using lanes::lane_sum;
+using lanes::LANES;
+using lanes::load;
+using lanes::splat;
+using lanes::store;
+using lanes::VecD;
+using lanes::VecL;
+
 bool has_damping(const Model& model, const Eigen::VectorXd& q, const Eigen::VectorXd& v) {
   return v.size() == q.size() && (model.params.k_dt != 0 || model.params.k_dn != 0);
 }
 
 }  // namespace
 
-ContactTerm::ContactTerm(const Model& model, ContactCulling culling) : m_culling(culling) {
+ContactTerm::ContactTerm(const Model& model, ContactCulling culling)
+    : m_culling(culling), m_margin(DEFAULT_MARGIN_RADII * model.params.radius) {
   const int points = model.params.contact_points;
   if (points < 1 || points > MAX_CONTACT_POINTS)
     throw std::invalid_argument("params.contact_points: expected 1 to " +
@@ -43,13 +56,29 @@ void ContactTerm::resize(const Model& model) {
                                 std::to_string(MAX_CONTACT_POINTS) + " points per segment, got " +
                                 std::to_string(m_points));
   const size_t n = static_cast<size_t>(m_num_seg) * m_points;
-  for (auto* a : {&m_px, &m_py, &m_pz, &m_vx, &m_vy, &m_vz}) a->assign(n, 0.0);
+  // LANES spare entries at the end: the culling reads whole vectors of points
+  for (auto* a : {&m_px, &m_py, &m_pz, &m_vx, &m_vy, &m_vz}) a->assign(n + LANES, 0.0);
+  m_basis.resize(m_points);
+  for (int a = 0; a < m_points; ++a)
+    for (int c = 0; c < 4; ++c) m_basis[a][c] = model.contact_quad.b[a][c];
   m_boxes.assign(m_num_seg, Aabb{});
+  m_list_boxes.assign(m_num_seg, Aabb{});
+  m_list_box_tests.assign(m_num_seg, 0);
+  m_seg_moved.assign(m_num_seg, 0.0);
+  m_list_valid = false;
   m_partners.resize(m_num_seg);
   m_pairs.resize(m_num_seg);
   m_rows.assign(m_num_seg, RowStats{});
   m_row_records.resize(m_num_seg);
   m_bvh = Bvh{};
+}
+
+void ContactTerm::set_candidate_margin(double margin) {
+  if (!(margin >= 0) || !std::isfinite(margin))
+    throw std::invalid_argument("contact candidate margin: expected a finite margin >= 0 cm, got " +
+                                std::to_string(margin));
+  m_margin = margin;
+  m_list_valid = false;
 }
 
 double ContactTerm::add_force(const Model& model, const Eigen::VectorXd& q,
@@ -59,6 +88,7 @@ double ContactTerm::add_force(const Model& model, const Eigen::VectorXd& q,
   m_stats = ContactStats{};
   m_timings = ContactTimings{};
   m_point_pairs.clear();
+  ++m_evaluations;
   const auto t0 = Clock::now();
   const double energy = m_culling == ContactCulling::BVH ? add_force_bvh(model, q, v, force)
                                                          : add_force_brute(model, q, v, force);
@@ -72,37 +102,71 @@ void ContactTerm::tabulate_points(const Model& model, const Eigen::VectorXd& q,
   const double r = model.params.radius;
   const int P = m_points;
   const bool with_v = has_damping(model, q, v);
-  tbb::parallel_for(tbb::blocked_range<int>(0, m_num_seg, 128),
-                    [&](const tbb::blocked_range<int>& range) {
-                      for (int s = range.begin(); s < range.end(); ++s) {
-                        const Vector12d x = gather_segment(q, model.seg_cp[s]);
-                        Aabb box;
-                        for (int a = 0; a < P; ++a) {
-                          const Eigen::Vector3d p = combine(x, quad.b[a]);
-                          const size_t k = static_cast<size_t>(s) * P + a;
-                          m_px[k] = p[0];
-                          m_py[k] = p[1];
-                          m_pz[k] = p[2];
-                          box.extend(p);
-                        }
-                        m_boxes[s] = box.grown(r);
-                        if (!with_v) continue;
-                        const Vector12d u = gather_segment(v, model.seg_cp[s]);
-                        for (int a = 0; a < P; ++a) {
-                          const Eigen::Vector3d w = combine(u, quad.b[a]);
-                          const size_t k = static_cast<size_t>(s) * P + a;
-                          m_vx[k] = w[0];
-                          m_vy[k] = w[1];
-                          m_vz[k] = w[2];
-                        }
-                      }
-                    });
+  const bool check_motion = m_list_valid && m_culling == ContactCulling::BVH;
+  tbb::parallel_for(
+      tbb::blocked_range<int>(0, m_num_seg, 128), [&](const tbb::blocked_range<int>& range) {
+        for (int s = range.begin(); s < range.end(); ++s) {
+          const Vector12d x = gather_segment(q, model.seg_cp[s]);
+          Aabb box;
+          for (int a = 0; a < P; ++a) {
+            const Eigen::Vector3d p = combine(x, quad.b[a]);
+            const size_t k = static_cast<size_t>(s) * P + a;
+            m_px[k] = p[0];
+            m_py[k] = p[1];
+            m_pz[k] = p[2];
+            box.extend(p);
+          }
+          m_boxes[s] = box.grown(r);
+          if (check_motion) {
+            // largest per-axis displacement of the segment's points since the
+            // candidate list was built
+            // (+inf for a non-finite point: it forces a rebuild)
+            double moved = 0;
+            bool finite = true;
+            for (int a = 0; a < P; ++a) {
+              const size_t k = static_cast<size_t>(s) * P + a;
+              moved = std::max({moved, std::abs(m_px[k] - m_lx[k]), std::abs(m_py[k] - m_ly[k]),
+                                std::abs(m_pz[k] - m_lz[k])});
+              finite = finite && std::isfinite(m_px[k] + m_py[k] + m_pz[k]);
+            }
+            m_seg_moved[s] = finite ? moved : std::numeric_limits<double>::infinity();
+          }
+          if (!with_v) continue;
+          const Vector12d u = gather_segment(v, model.seg_cp[s]);
+          for (int a = 0; a < P; ++a) {
+            const Eigen::Vector3d w = combine(u, quad.b[a]);
+            const size_t k = static_cast<size_t>(s) * P + a;
+            m_vx[k] = w[0];
+            m_vy[k] = w[1];
+            m_vz[k] = w[2];
+          }
+        }
+      });
+  // the maximum is exact, so the order does not matter
+  m_list_moved = 0;
+  if (check_motion)
+    for (int s = 0; s < m_num_seg; ++s) m_list_moved = std::max(m_list_moved, m_seg_moved[s]);
 }
 
 // The optimised pair kernel: the formulas of contact_kernel.cpp on the point pairs that
 // survive culling. Points of i farther than r from box_j (= points of j grown by r) are
 // farther than 2r from every point of j, and vice versa.
+//
+// The surviving points of j are copied into short aligned arrays padded to a multiple of
+// LANES with far-away points, and every point of i is tested against them LANES at a time
+// with GCC/Clang vector extensions, branch-free: the force of a lane out of contact is
+// blended to 0. There is no square root: with Δy the separation and d² = |Δy|²/4r²,
+//   contact:  F_j = −k ℓℓ ww (2/4r²)(1 − 1/d⁴) Δy
+//   damping:  F_j = −2 ℓℓ ww [k_dt Δv − (k_dt − k_dn)(Δy·Δv) Δy / |Δy|²]
+// ((n̂·Δv) n̂ = (Δy·Δv) Δy/|Δy|²), so one division 1/|Δy|² per tested pair serves both.
+// Sums over lanes are formed lane-wise and reduced in a fixed order: the result is a pure
+// function of the inputs (round-off differs from the plain kernel's order only).
+template <bool DAMP>
 void ContactTerm::pair_kernel(const Model& model, int i, int j, RowStats& row) {
+  // a candidate kept from an older list whose current boxes no longer overlap has no
+  // point pair within 2r (see add_force_bvh) and is not counted
+  if (!m_boxes[i].overlaps(m_boxes[j])) return;
+  ++row.candidates;
   const int P = m_points;
   const Params& prm = model.params;
   const QuadratureTable& quad = model.contact_quad;
@@ -111,97 +175,156 @@ void ContactTerm::pair_kernel(const Model& model, int i, int j, RowStats& row) {
   const double inv_four_r2 = 1.0 / four_r2;
   const size_t bi = static_cast<size_t>(i) * P, bj = static_cast<size_t>(j) * P;
 
-  const Aabb near_j = m_boxes[j].grown(r);
-  int ia[MAX_CONTACT_POINTS];
-  int na = 0;
-  for (int a = 0; a < P; ++a)
-    if (near_j.contains(m_px[bi + a], m_py[bi + a], m_pz[bi + a])) ia[na++] = a;
+  int ia[MAX_CONTACT_POINTS + LANES];
+  const int na = points_inside(m_boxes[j].grown(r), bi, ia);
   if (na == 0) return;
-  const Aabb near_i = m_boxes[i].grown(r);
-  int jb[MAX_CONTACT_POINTS];
-  double bx[MAX_CONTACT_POINTS], by[MAX_CONTACT_POINTS], bz[MAX_CONTACT_POINTS];
-  int nb = 0;
-  for (int b = 0; b < P; ++b) {
-    const double x = m_px[bj + b], y = m_py[bj + b], z = m_pz[bj + b];
-    if (!near_i.contains(x, y, z)) continue;
-    jb[nb] = b;
-    bx[nb] = x;
-    by[nb] = y;
-    bz[nb] = z;
-    ++nb;
-  }
+  constexpr int CAP = MAX_CONTACT_POINTS + LANES;
+  int jb[CAP];
+  const int nb = points_inside(m_boxes[i].grown(r), bj, jb);
   if (nb == 0) return;
+  alignas(64) double bx[CAP], by[CAP], bz[CAP], bw[CAP];
+  alignas(64) double bvx[DAMP ? CAP : 1], bvy[DAMP ? CAP : 1], bvz[DAMP ? CAP : 1];
+  for (int kb = 0; kb < nb; ++kb) {
+    const size_t k = bj + jb[kb];
+    bx[kb] = m_px[k];
+    by[kb] = m_py[k];
+    bz[kb] = m_pz[k];
+    bw[kb] = quad.w[jb[kb]];
+    if constexpr (DAMP) {
+      bvx[kb] = m_vx[k];
+      bvy[kb] = m_vy[k];
+      bvz[kb] = m_vz[k];
+    }
+  }
   row.tested += static_cast<long long>(na) * nb;
+  // pad with points 1e10 cm away: their lanes are never in contact and stay finite
+  const int nbp = (nb + LANES - 1) / LANES * LANES;
+  for (int k = nb; k < nbp; ++k) {
+    bx[k] = by[k] = bz[k] = 1e10;
+    bw[k] = 0.0;
+    if constexpr (DAMP) bvx[k] = bvy[k] = bvz[k] = 0.0;
+  }
 
-  const bool damp = m_has_velocity;
   const double li = model.rest_length[i], lj = model.rest_length[j];
   const double kl = prm.k_contact * li * lj;
   const double kdt = prm.k_dt, kdiff = prm.k_dt - prm.k_dn;
-  // forces on the surviving points of i (fa*) and of j (fb*)
-  double fax[MAX_CONTACT_POINTS], fay[MAX_CONTACT_POINTS], faz[MAX_CONTACT_POINTS];
-  double fbx[MAX_CONTACT_POINTS], fby[MAX_CONTACT_POINTS], fbz[MAX_CONTACT_POINTS];
-  std::fill_n(fbx, nb, 0.0);
-  std::fill_n(fby, nb, 0.0);
-  std::fill_n(fbz, nb, 0.0);
-  int contacts = 0;
-  double energy = 0;
-  double min_d2 = row.min_d2;
+  // forces on the surviving points of j (fb*); those on the points of i go straight into
+  // gi* = Σ_a B(t_a) f_a per axis (the 4 control points of segment i in the lanes)
+  static_assert(LANES == 4, "the basis scatter keeps the 4 control points in one vector");
+  VecD gix = splat(0.0), giy = gix, giz = gix;
+  alignas(64) double fbx[CAP], fby[CAP], fbz[CAP];
+  alignas(64) double d2row[CAP];
+  std::fill_n(fbx, nbp, 0.0);
+  std::fill_n(fby, nbp, 0.0);
+  std::fill_n(fbz, nbp, 0.0);
+  const VecD four_r2_v = splat(four_r2), inv_four_r2_v = splat(inv_four_r2);
+  const VecD zero = splat(0.0), one = splat(1.0), two = splat(2.0);
+  VecD energy = zero, min_d2 = splat(std::numeric_limits<double>::infinity());
+  VecL contacts = VecL{};
   for (int ka = 0; ka < na; ++ka) {
     const int a = ia[ka];
-    const double ax = m_px[bi + a], ay = m_py[bi + a], az = m_pz[bi + a];
-    const double wa = quad.w[a];
-    double sx = 0, sy = 0, sz = 0;
-    for (int kb = 0; kb < nb; ++kb) {
-      const double dx = bx[kb] - ax, dy = by[kb] - ay, dz = bz[kb] - az;
-      const double d2 = dx * dx + dy * dy + dz * dz;
-      if (!(d2 < four_r2)) continue;
-      const int b = jb[kb];
-      ++contacts;
-      min_d2 = std::min(min_d2, d2);
-      const double ww = wa * quad.w[b];
-      // d = |Δy|/2r, f = 1/d² + d² − 2, f' = −2/d³ + 2d; the force on y_j(t_b),
-      // −∂E/∂y_j = −k ℓℓ ww f'(d)/(2r) Δy/|Δy| = −k ℓℓ ww (2/4r²)(1 − 1/d⁴) Δy
-      const double dd = d2 * inv_four_r2;
-      const double inv_dd = four_r2 / d2;
-      energy += kl * ww * (inv_dd + dd - 2.0);
-      const double s = -kl * ww * 2.0 * inv_four_r2 * (1.0 - inv_dd * inv_dd);
-      double fx = s * dx, fy = s * dy, fz = s * dz;
-      if (damp) {
-        const double inv = 1.0 / std::sqrt(d2);
-        const double nx = dx * inv, ny = dy * inv, nz = dz * inv;
-        const double dvx = m_vx[bj + b] - m_vx[bi + a];
-        const double dvy = m_vy[bj + b] - m_vy[bi + a];
-        const double dvz = m_vz[bj + b] - m_vz[bi + a];
-        const double vn = nx * dvx + ny * dvy + nz * dvz;
-        const double c = -2.0 * li * lj * ww;
-        fx += c * (kdt * dvx - kdiff * vn * nx);
-        fy += c * (kdt * dvy - kdiff * vn * ny);
-        fz += c * (kdt * dvz - kdiff * vn * nz);
+    const VecD ax = splat(m_px[bi + a]), ay = splat(m_py[bi + a]), az = splat(m_pz[bi + a]);
+    const VecD kla = splat(kl * quad.w[a]);
+    VecD avx = zero, avy = zero, avz = zero, lla = zero;
+    if constexpr (DAMP) {
+      avx = splat(m_vx[bi + a]);
+      avy = splat(m_vy[bi + a]);
+      avz = splat(m_vz[bi + a]);
+      lla = splat(-2.0 * li * lj * quad.w[a]);
+    }
+    VecD sx = zero, sy = zero, sz = zero;
+    for (int kb = 0; kb < nbp; kb += LANES) {
+      const VecD dx = load(bx + kb) - ax, dy = load(by + kb) - ay, dz = load(bz + kb) - az;
+      const VecD d2 = dx * dx + dy * dy + dz * dz;
+      store(d2row + kb, d2);
+      const VecL in = d2 < four_r2_v;
+      // most vectors have no lane in contact (the boxes are loose): skip the rest
+      if (!any(in)) continue;
+      const VecD inv_d2 = one / d2;
+      const VecD inv_dd = four_r2_v * inv_d2;  // 1/d²
+      const VecD w = load(bw + kb);
+      const VecD kw = kla * w;  // k ℓℓ ww
+      // f(d) = 1/d² + d² − 2; the force on y_j(t_b) is g Δy (+ damping)
+      energy += in ? kw * (inv_dd + d2 * inv_four_r2_v - two) : zero;
+      VecD g = -two * inv_four_r2_v * kw * (one - inv_dd * inv_dd);
+      VecD fx, fy, fz;
+      if constexpr (DAMP) {
+        const VecD dvx = load(bvx + kb) - avx, dvy = load(bvy + kb) - avy,
+                   dvz = load(bvz + kb) - avz;
+        const VecD c = lla * w;  // −2 ℓℓ ww
+        g -= c * splat(kdiff) * (dx * dvx + dy * dvy + dz * dvz) * inv_d2;
+        const VecD ct = c * splat(kdt);
+        fx = g * dx + ct * dvx;
+        fy = g * dy + ct * dvy;
+        fz = g * dz + ct * dvz;
+      } else {
+        fx = g * dx;
+        fy = g * dy;
+        fz = g * dz;
       }
-      fbx[kb] += fx;
-      fby[kb] += fy;
-      fbz[kb] += fz;
+      fx = in ? fx : zero;
+      fy = in ? fy : zero;
+      fz = in ? fz : zero;
+      contacts -= in;  // a true comparison is −1
+      min_d2 = d2 < min_d2 ? d2 : min_d2;
+      store(fbx + kb, load(fbx + kb) + fx);
+      store(fby + kb, load(fby + kb) + fy);
+      store(fbz + kb, load(fbz + kb) + fz);
       sx -= fx;
       sy -= fy;
       sz -= fz;
-      if (m_record) m_row_records[i].push_back({i, a, j, b});
     }
-    fax[ka] = sx;
-    fay[ka] = sy;
-    faz[ka] = sz;
+    const VecD basis_a = load(m_basis[a].data());
+    gix += basis_a * lane_sum(sx);
+    giy += basis_a * lane_sum(sy);
+    giz += basis_a * lane_sum(sz);
+    if (m_record)
+      for (int kb = 0; kb < nb; ++kb)
+        if (d2row[kb] < four_r2) m_row_records[i].push_back({i, a, j, jb[kb]});
   }
-  row.min_d2 = min_d2;
-  if (contacts == 0) return;
-  row.contacts += contacts;
-  row.energy += energy;
+  // the smallest squared distance over all lanes is < 4r² exactly when some pair is in
+  // contact, and then it is the smallest over the pairs in contact
+  const double lane_min = lanes::lane_min(min_d2);
+  if (lane_min < four_r2) row.min_d2 = std::min(row.min_d2, lane_min);
+  long long n_contacts = 0;
+  for (int l = 0; l < LANES; ++l) n_contacts += contacts[l];
+  if (n_contacts == 0) return;
+  row.contacts += n_contacts;
+  row.energy += lane_sum(energy);
+  VecD gjx = splat(0.0), gjy = gjx, gjz = gjx;
+  for (int kb = 0; kb < nb; ++kb) {
+    const VecD basis_b = load(m_basis[jb[kb]].data());
+    gjx += basis_b * fbx[kb];
+    gjy += basis_b * fby[kb];
+    gjz += basis_b * fbz[kb];
+  }
   PairForce& pf = m_pairs[i].emplace_back();
   pf.j = j;
-  pf.force_i.setZero();
-  pf.force_j.setZero();
-  for (int ka = 0; ka < na; ++ka)
-    scatter(pf.force_i, quad.b[ia[ka]], Eigen::Vector3d(fax[ka], fay[ka], faz[ka]));
-  for (int kb = 0; kb < nb; ++kb)
-    scatter(pf.force_j, quad.b[jb[kb]], Eigen::Vector3d(fbx[kb], fby[kb], fbz[kb]));
+  for (int c = 0; c < 4; ++c) {
+    pf.force_i[3 * c] = gix[c];
+    pf.force_i[3 * c + 1] = giy[c];
+    pf.force_i[3 * c + 2] = giz[c];
+    pf.force_j[3 * c] = gjx[c];
+    pf.force_j[3 * c + 1] = gjy[c];
+    pf.force_j[3 * c + 2] = gjz[c];
+  }
+}
+
+// Indices of the points of segment (first point `base`) inside `box`, in order; returns
+// their count. Whole vectors of points are tested at once; the lanes past the segment's
+// last point are dropped.
+int ContactTerm::points_inside(const Aabb& box, size_t base, int* out) const {
+  const VecD lx = splat(box.lo[0]), ly = splat(box.lo[1]), lz = splat(box.lo[2]);
+  const VecD hx = splat(box.hi[0]), hy = splat(box.hi[1]), hz = splat(box.hi[2]);
+  int n = 0;
+  for (int a0 = 0; a0 < m_points; a0 += LANES) {
+    const VecD x = load(&m_px[base + a0]), y = load(&m_py[base + a0]), z = load(&m_pz[base + a0]);
+    unsigned bits =
+        lane_bits((x >= lx) & (x <= hx) & (y >= ly) & (y <= hy) & (z >= lz) & (z <= hz));
+    if (m_points - a0 < LANES) bits &= (1u << (m_points - a0)) - 1;
+    for (; bits; bits &= bits - 1) out[n++] = a0 + std::countr_zero(bits);
+  }
+  return n;
 }
 
 double ContactTerm::add_force_bvh(const Model& model, const Eigen::VectorXd& q,
@@ -213,29 +336,46 @@ double ContactTerm::add_force_bvh(const Model& model, const Eigen::VectorXd& q,
   tabulate_points(model, q, v);
   m_timings.points = seconds_since(t);
 
-  t = Clock::now();
-  if (m_bvh.empty() || m_bvh.num_leaves() != n) {
-    m_bvh.build(m_boxes);
-    m_timings.build = seconds_since(t);
-  } else {
-    m_bvh.refit(m_boxes);
-    m_timings.refit = seconds_since(t);
-  }
-
-  // candidate segment pairs: every segment queries the tree with its own box
-  t = Clock::now();
-  tbb::parallel_for(tbb::blocked_range<int>(0, n, 64), [&](const tbb::blocked_range<int>& range) {
-    for (int i = range.begin(); i < range.end(); ++i) {
-      std::vector<int>& partners = m_partners[i];
-      partners.clear();
-      m_rows[i] = RowStats{};
-      m_rows[i].box_tests = m_bvh.query(m_boxes[i], [&](int j) {
-        if (j != i && !model.neighbours(i, j)) partners.push_back(j);
-      });
-      std::sort(partners.begin(), partners.end());
+  // candidate segment pairs, rebuilt only when some point moved more than δ/2 (see the
+  // header: the reused list gives the same forces bitwise)
+  const double half_margin = 0.5 * m_margin;
+  const bool rebuild = !m_list_valid || m_list_model != &model ||
+                       m_list_radius != model.params.radius || !(m_list_moved <= half_margin);
+  m_stats.candidates_rebuilt = rebuild;
+  m_rebuilds += rebuild;
+  if (rebuild) {
+    t = Clock::now();
+    m_lx = m_px;
+    m_ly = m_py;
+    m_lz = m_pz;
+    for (int s = 0; s < n; ++s) m_list_boxes[s] = m_boxes[s].grown(half_margin);
+    if (m_bvh.empty() || m_bvh.num_leaves() != n) {
+      m_bvh.build(m_list_boxes);
+      m_timings.build = seconds_since(t);
+    } else {
+      m_bvh.refit(m_list_boxes);
+      m_timings.refit = seconds_since(t);
     }
-  });
-  m_timings.traverse = seconds_since(t);
+    // every segment queries the tree with its own (grown) box
+    t = Clock::now();
+    tbb::parallel_for(tbb::blocked_range<int>(0, n, 64), [&](const tbb::blocked_range<int>& range) {
+      for (int i = range.begin(); i < range.end(); ++i) {
+        std::vector<int>& partners = m_partners[i];
+        partners.clear();
+        m_list_box_tests[i] = m_bvh.query(m_list_boxes[i], [&](int j) {
+          if (j != i && !model.neighbours(i, j)) partners.push_back(j);
+        });
+        std::sort(partners.begin(), partners.end());
+        // headroom, so that later rebuilds rarely allocate
+        if (partners.capacity() < partners.size() + partners.size() / 4)
+          partners.reserve(partners.size() + partners.size() / 2);
+      }
+    });
+    m_timings.traverse = seconds_since(t);
+    m_list_valid = true;
+    m_list_model = &model;
+    m_list_radius = model.params.radius;
+  }
 
   // point-pair kernels, each pair (i < j) once, owned by row i
   t = Clock::now();
@@ -244,11 +384,15 @@ double ContactTerm::add_force_bvh(const Model& model, const Eigen::VectorXd& q,
       m_pairs[i].clear();
       if (m_record) m_row_records[i].clear();
       RowStats& row = m_rows[i];
+      row = RowStats{};
+      if (rebuild) row.box_tests = m_list_box_tests[i];
       const std::vector<int>& partners = m_partners[i];
       for (auto it = std::upper_bound(partners.begin(), partners.end(), i); it != partners.end();
            ++it) {
-        ++row.candidates;
-        pair_kernel(model, i, *it, row);
+        if (m_has_velocity)
+          pair_kernel<true>(model, i, *it, row);
+        else
+          pair_kernel<false>(model, i, *it, row);
       }
     }
   });

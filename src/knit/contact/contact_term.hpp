@@ -10,18 +10,36 @@
 //   1. points: every segment's contact quadrature points y_i(t_a) and velocities v_i(t_a)
 //      are tabulated, and the segment's box is the box of its points grown by r;
 //   2. refit: a BVH over the segment boxes, built once (first evaluation) and refit after;
-//   3. traverse: every segment queries the tree with its own box (in parallel) and keeps
-//      the overlapping non-neighbour segments, sorted — the candidate segment pairs;
-//   4. kernel: for each candidate pair (i < j), only the points of i inside box_j grown by
+//   3. traverse: every segment queries the tree with its own box grown by δ/2 (in
+//      parallel) and keeps the overlapping non-neighbour segments, sorted — the candidate
+//      segment pairs. This list is kept (Verlet-list style) across evaluations — both
+//      midpoint evaluations of a step and following steps — until some contact point has
+//      moved more than δ/2 along some axis since it was built (δ = candidate_margin());
+//   4. kernel: for each candidate pair (i < j) whose current boxes overlap, only the points of i
+//   inside box_j grown by
 //      r (and of j inside box_i grown by r) can be within 2r of the other segment; those
 //      point pairs are tested densely and the pair's forces are stored if any is in contact;
 //   5. gather: every segment sums its pair forces in a fixed order, then every control
 //      point sums its ≤ 4 segments (SegmentAccumulator).
+//
+// Why a kept candidate list gives the same result, bitwise, as a fresh one. Let P_i be the
+// contact points of segment i now, P_i⁰ when the list was built, and box(X) the bounding
+// box of X. The list holds every non-neighbour pair whose boxes box(P⁰)+r+δ/2 overlap.
+// While every point moved by at most δ/2 along each axis, box(P_i) ⊂ box(P_i⁰)+δ/2, so
+// every pair whose current boxes box(P)+r overlap is still in the list. A point pair
+// closer than 2r lies in overlapping current boxes, so no contact is missed; a listed
+// pair whose current boxes do not overlap is skipped before its kernel (on some axis its
+// points are more than 2r apart, so it has no contact and would have produced nothing).
+// The kernels of the remaining pairs, their order (row i, partners j ascending) and the
+// gather are those of a fresh list, so forces, energy and counts are identical; only
+// box_tests (0 when the list was kept) tells the two apart.
+//
 // No step accumulates across threads, so the result is bitwise independent of the thread
 // count. Buffers are kept between evaluations, so the steady state does not allocate.
 // ContactCulling::BRUTE_FORCE visits all pairs serially with the plain dense kernel: the
 // test oracle, O(N²).
 #include <Eigen/Core>
+#include <array>
 #include <limits>
 #include <string_view>
 #include <vector>
@@ -46,8 +64,11 @@ struct ContactStats {
   /// smallest d over non-neighbouring point pairs; +inf when no pair is within the
   /// culling radius d < 1 (it does not depend on the culling method)
   double min_distance_ratio = std::numeric_limits<double>::infinity();
-  /// BVH node boxes tested during the traversal (0 for brute force)
+  /// BVH node boxes tested during the traversal (0 for brute force, and when the
+  /// candidate list of an earlier evaluation was kept)
   long long box_tests = 0;
+  /// whether this evaluation rebuilt the candidate list (BVH culling)
+  bool candidates_rebuilt = false;
 };
 
 /// Wall-clock seconds of the stages of the last evaluation.
@@ -72,6 +93,8 @@ class ContactTerm : public Term {
  public:
   /// Largest supported Params::contact_points.
   static constexpr int MAX_CONTACT_POINTS = 64;
+  /// Default candidate margin δ in yarn radii (see candidate_margin()).
+  static constexpr double DEFAULT_MARGIN_RADII = 0.5;
 
   /// Sizes the buffers for `model` (the BVH is built on the first evaluation). Throws
   /// std::invalid_argument if model.params.contact_points exceeds MAX_CONTACT_POINTS.
@@ -86,6 +109,16 @@ class ContactTerm : public Term {
                    Eigen::VectorXd& force) override;
 
   ContactCulling culling() const { return m_culling; }
+  /// The candidate margin δ (cm): candidate segment pairs are found with boxes grown by
+  /// δ/2 and kept until a contact point has moved more than δ/2 along some axis. Larger
+  /// margins rebuild less often and test more candidates; results do not depend on it.
+  double candidate_margin() const { return m_margin; }
+  /// Sets δ (cm, ≥ 0; 0 rebuilds whenever anything moved). Throws std::invalid_argument
+  /// for a negative or non-finite margin.
+  void set_candidate_margin(double margin);
+  /// Evaluations so far, and how many of them rebuilt the candidate list.
+  long long evaluations() const { return m_evaluations; }
+  long long candidate_rebuilds() const { return m_rebuilds; }
   /// Counts of the last evaluation.
   const ContactStats& last_stats() const { return m_stats; }
   /// Stage timings of the last evaluation.
@@ -111,7 +144,9 @@ class ContactTerm : public Term {
 
   void resize(const Model& model);
   void tabulate_points(const Model& model, const Eigen::VectorXd& q, const Eigen::VectorXd& v);
+  template <bool DAMP>
   void pair_kernel(const Model& model, int i, int j, RowStats& row);
+  int points_inside(const Aabb& box, size_t base, int* out) const;
   double add_force_bvh(const Model& model, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
                        Eigen::VectorXd& force);
   double add_force_brute(const Model& model, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
@@ -124,9 +159,21 @@ class ContactTerm : public Term {
   bool m_record = false;
   // contact points and velocities, structure of arrays, index segment·P + a
   std::vector<double> m_px, m_py, m_pz, m_vx, m_vy, m_vz;
+  std::vector<std::array<double, 4>> m_basis;  // B_0..3(t_a) per contact point
   std::vector<Aabb> m_boxes;
   Bvh m_bvh;
-  std::vector<std::vector<int>> m_partners;     // per segment: candidates, sorted
+  std::vector<std::vector<int>> m_partners;  // per segment: candidates, sorted
+  // the candidate list: margin δ, points and grown boxes when it was built, and how far
+  // the points moved since (largest per-axis displacement, per segment and overall)
+  double m_margin = 0;
+  bool m_list_valid = false;
+  const Model* m_list_model = nullptr;
+  double m_list_radius = 0;
+  double m_list_moved = 0;
+  long long m_evaluations = 0, m_rebuilds = 0;
+  std::vector<double> m_lx, m_ly, m_lz, m_seg_moved;
+  std::vector<Aabb> m_list_boxes;
+  std::vector<long long> m_list_box_tests;
   std::vector<std::vector<PairForce>> m_pairs;  // per segment i: pairs (i, j > i) in contact
   std::vector<RowStats> m_rows;
   std::vector<std::vector<ContactPointPair>> m_row_records;

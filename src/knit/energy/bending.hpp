@@ -13,6 +13,12 @@ namespace knit {
 double bending_kernel(const Vector12d& x, double rest_length, double k_bend,
                       const QuadratureTable& quad, Vector12d* grad);
 
+/// bending_kernel for lanes::LANES segments at once, one per lane: x[c] is coordinate c of
+/// the 12 control-point coordinates of every lane's segment; overwrites grad with ∂E/∂x
+/// and returns every lane's energy. The same operations as bending_kernel, lane by lane.
+lanes::VecD bending_kernel_lanes(const lanes::VecD x[12], lanes::VecD rest_length, double k_bend,
+                                 const QuadratureTable& quad, lanes::VecD grad[12]);
+
 class BendingEnergy final : public Term {
  public:
   std::string_view name() const override { return "bending"; }

@@ -12,6 +12,10 @@ namespace knit {
 double length_kernel(const Vector12d& x, double rest_length, double k_len,
                      const QuadratureTable& quad, Vector12d* grad);
 
+/// length_kernel for lanes::LANES segments at once (see bending_kernel_lanes).
+lanes::VecD length_kernel_lanes(const lanes::VecD x[12], lanes::VecD rest_length, double k_len,
+                                const QuadratureTable& quad, lanes::VecD grad[12]);
+
 class LengthEnergy final : public Term {
  public:
   std::string_view name() const override { return "length"; }
