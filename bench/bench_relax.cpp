@@ -12,11 +12,16 @@ int main(int argc, char** argv) {
   double max_time = 2.0;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string a = argv[i], v = argv[i + 1];
-    if (a == "--pattern") pattern = v;
-    else if (a == "--rows") rows = std::stoi(v);
-    else if (a == "--cols") cols = std::stoi(v);
-    else if (a == "--max-time") max_time = std::stod(v);
-    else if (a == "--threads") threads = std::stoi(v);
+    if (a == "--pattern")
+      pattern = v;
+    else if (a == "--rows")
+      rows = std::stoi(v);
+    else if (a == "--cols")
+      cols = std::stoi(v);
+    else if (a == "--max-time")
+      max_time = std::stod(v);
+    else if (a == "--threads")
+      threads = std::stoi(v);
     else {
       std::cerr << "bench_relax: unknown option " << a << "\n";
       return 1;
@@ -24,7 +29,8 @@ int main(int argc, char** argv) {
   }
   std::unique_ptr<tbb::global_control> gc;
   if (threads > 0)
-    gc = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, threads);
+    gc = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                               threads);
   knit::KnitOptions ko;
   ko.rows = rows;
   ko.cols = cols;
@@ -33,9 +39,11 @@ int main(int argc, char** argv) {
   p.gravity.setZero();
   const knit::Model model = knit::build_knit_model(knit, p, knit::RELAX_SHRINK, 0.05);
   knit::Simulator sim(model);
-  sim.add_filter(std::make_unique<knit::NonRigidDampingFilter>(model, p.alpha_small, p.alpha_large));
+  sim.add_filter(
+      std::make_unique<knit::NonRigidDampingFilter>(model, p.alpha_small, p.alpha_large));
   knit::State state;
-  state.q = Eigen::Map<const Eigen::VectorXd>(knit.control_points.data(), knit.control_points.size());
+  state.q =
+      Eigen::Map<const Eigen::VectorXd>(knit.control_points.data(), knit.control_points.size());
   state.v = Eigen::VectorXd::Zero(state.q.size());
   knit::RelaxOptions ro;
   ro.max_time = max_time;

@@ -10,10 +10,14 @@ int main(int argc, char** argv) {
   int points = 20, steps = 5, threads = 0, max_segments = 70000;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string a = argv[i], v = argv[i + 1];
-    if (a == "--contact-points") points = std::stoi(v);
-    else if (a == "--steps") steps = std::stoi(v);
-    else if (a == "--threads") threads = std::stoi(v);
-    else if (a == "--max-segments") max_segments = std::stoi(v);
+    if (a == "--contact-points")
+      points = std::stoi(v);
+    else if (a == "--steps")
+      steps = std::stoi(v);
+    else if (a == "--threads")
+      threads = std::stoi(v);
+    else if (a == "--max-segments")
+      max_segments = std::stoi(v);
     else {
       std::cerr << "bench_scaling: unknown option " << a << "\n";
       return 1;
@@ -21,7 +25,8 @@ int main(int argc, char** argv) {
   }
   std::unique_ptr<tbb::global_control> gc;
   if (threads > 0)
-    gc = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, threads);
+    gc = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                               threads);
   const std::vector<std::pair<int, int>> sizes = {{12, 11}, {24, 22}, {42, 32}, {64, 64}, {90, 90}};
   nlohmann::json runs = nlohmann::json::array();
   double sx = 0, sy = 0, sxx = 0, sxy = 0;
@@ -39,7 +44,8 @@ int main(int argc, char** argv) {
     sxy += x * y;
     ++n;
     runs.push_back(r);
-    std::cerr << "scaling: " << x << " segments: " << r["us_per_segment_step"].get<double>() << " us/segment-step\n";
+    std::cerr << "scaling: " << x << " segments: " << r["us_per_segment_step"].get<double>()
+              << " us/segment-step\n";
   }
   const double slope = (n * sxy - sx * sy) / (n * sxx - sx * sx);
   const double intercept = (sy - slope * sx) / n;

@@ -12,13 +12,20 @@ int main(int argc, char** argv) {
   int rows = 42, cols = 32, points = 20, steps = 20, threads = 0;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string a = argv[i], v = argv[i + 1];
-    if (a == "--state") state = v;
-    else if (a == "--pattern") pattern = v;
-    else if (a == "--rows") rows = std::stoi(v);
-    else if (a == "--cols") cols = std::stoi(v);
-    else if (a == "--contact-points") points = std::stoi(v);
-    else if (a == "--steps") steps = std::stoi(v);
-    else if (a == "--threads") threads = std::stoi(v);
+    if (a == "--state")
+      state = v;
+    else if (a == "--pattern")
+      pattern = v;
+    else if (a == "--rows")
+      rows = std::stoi(v);
+    else if (a == "--cols")
+      cols = std::stoi(v);
+    else if (a == "--contact-points")
+      points = std::stoi(v);
+    else if (a == "--steps")
+      steps = std::stoi(v);
+    else if (a == "--threads")
+      threads = std::stoi(v);
     else {
       std::cerr << "bench_step: unknown option " << a << "\n";
       return 1;
@@ -26,7 +33,8 @@ int main(int argc, char** argv) {
   }
   std::unique_ptr<tbb::global_control> gc;
   if (threads > 0)
-    gc = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, threads);
+    gc = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                               threads);
   knit::bench::StepSetup s = knit::bench::make_step_setup(pattern, rows, cols, points, state);
   nlohmann::json out = knit::bench::time_steps(s, 3, steps, 1.0 / 11800);
   out["benchmark"] = "step";

@@ -68,8 +68,8 @@ struct StepSetup {
   bool relaxed = false;
 };
 
-inline StepSetup make_step_setup(const std::string& pattern, int rows, int cols,
-                                 int contact_points, const std::string& state_path = "") {
+inline StepSetup make_step_setup(const std::string& pattern, int rows, int cols, int contact_points,
+                                 const std::string& state_path = "") {
   KnitOptions ko;
   ko.rows = rows;
   ko.cols = cols;
@@ -78,9 +78,10 @@ inline StepSetup make_step_setup(const std::string& pattern, int rows, int cols,
   if (!state_path.empty()) {
     const StateFile f = read_state_file(state_path);
     if (f.state.q.size() != knit.control_points.size())
-      throw std::runtime_error(state_path + ": not a " + pattern + " " + std::to_string(rows) + "x" +
-                               std::to_string(cols) + " sample");
-    knit.control_points = Eigen::Map<const Eigen::Matrix3Xd>(f.state.q.data(), 3, f.state.q.size() / 3);
+      throw std::runtime_error(state_path + ": not a " + pattern + " " + std::to_string(rows) +
+                               "x" + std::to_string(cols) + " sample");
+    knit.control_points =
+        Eigen::Map<const Eigen::Matrix3Xd>(f.state.q.data(), 3, f.state.q.size() / 3);
     s.relaxed = true;
   }
   Params p = Params::simulation();
@@ -88,7 +89,8 @@ inline StepSetup make_step_setup(const std::string& pattern, int rows, int cols,
   const Model model = build_knit_model(knit, p);
   s.sim = std::make_unique<Simulator>(model);
   s.sim->add_filter(std::make_unique<NonRigidDampingFilter>(model, p.alpha_small, p.alpha_large));
-  s.state.q = Eigen::Map<const Eigen::VectorXd>(knit.control_points.data(), knit.control_points.size());
+  s.state.q =
+      Eigen::Map<const Eigen::VectorXd>(knit.control_points.data(), knit.control_points.size());
   s.state.v = Eigen::VectorXd::Zero(s.state.q.size());
   s.sim->satisfy_constraints(s.state);
   return s;

@@ -35,8 +35,8 @@ inline void expect_gradient_matches(const std::function<double(const Eigen::Vect
   ASSERT_GT(scale, 0.0) << what << ": gradient is zero; the check would be vacuous";
   for (Eigen::Index k = 0; k < x.size(); ++k)
     EXPECT_NEAR(analytic[k], fd[k], rel * scale)
-        << what << ": entry " << k << " (control point " << k / 3 << ", coordinate " << "xyz"[k % 3]
-        << ")";
+        << what << ": entry " << k << " (control point " << k / 3 << ", coordinate "
+        << "xyz"[k % 3] << ")";
 }
 
 /// Random perturbation of size `amount` in every coordinate.

@@ -32,7 +32,8 @@ void relax_imported(Opts& o) {
   params.contact_points = o.contact_points;
   if (!o.time_step_given) o.relax.time_step = 1.0 / 25000;
   knit::ModelBuilder builder;
-  for (const knit::ImportedYarn& y : knit::import_yarns(o.from, o.import)) builder.add_yarn(y.control_points);
+  for (const knit::ImportedYarn& y : knit::import_yarns(o.from, o.import))
+    builder.add_yarn(y.control_points);
   params.radius = o.import.radius;
   const knit::Model model = builder.build(params, o.shrink);
   auto control = make_thread_control(o.threads);
@@ -40,13 +41,15 @@ void relax_imported(Opts& o) {
   state.q = builder.positions();
   state.v = Eigen::VectorXd::Zero(state.q.size());
   fs::create_directories(o.out);
-  knit::write_state_file((fs::path(o.out) / "initial.kstate").string(), knit::make_state_file(model, state));
+  knit::write_state_file((fs::path(o.out) / "initial.kstate").string(),
+                         knit::make_state_file(model, state));
   knit::Simulator sim(model);
   o.relax.out_dir = o.out;
   o.relax.progress = !o.quiet;
   o.relax.write_frames = !o.no_frames;
   const knit::RunReport report =
-      knit::relax(sim, state, o.relax, {{"from", o.from}, {"shrink", o.shrink}, {"contact_points", o.contact_points}});
+      knit::relax(sim, state, o.relax,
+                  {{"from", o.from}, {"shrink", o.shrink}, {"contact_points", o.contact_points}});
   fs::copy_file(fs::path(o.out) / "final.kstate", fs::path(o.out) / "relaxed.kstate",
                 fs::copy_options::overwrite_existing);
   print_report(report, o.out);
@@ -71,20 +74,22 @@ void register_relax(CLI::App& app) {
   auto o = std::make_shared<Opts>();
   o->knit.rows = 12;
   o->knit.cols = 12;
-  CLI::App* cmd = app.add_subcommand(
-      "relax", "build a knit pattern's interlocked yarn and relax it to rest");
+  CLI::App* cmd =
+      app.add_subcommand("relax", "build a knit pattern's interlocked yarn and relax it to rest");
   cmd->add_option("pattern", o->pattern,
                   "built-in pattern (stockinette, garter, rib2x2, rib1x1, seed, "
                   "reverse_stockinette) or a chart file (k/p per stitch, last line = row 0)");
   cmd->add_option("--from", o->from,
                   "relax yarns imported from a .yarns, .bcc or .obj file instead of a pattern");
-  cmd->add_option("--scale", o->import.scale,
-                  "with --from: multiply coordinates (default: the file's yarn radius becomes 0.125 cm)")
+  cmd->add_option(
+         "--scale", o->import.scale,
+         "with --from: multiply coordinates (default: the file's yarn radius becomes 0.125 cm)")
       ->check(CLI::PositiveNumber);
   cmd->add_option("--out,-o", o->out, "output directory")->required();
   cmd->add_option("--rows", o->knit.rows, "rows (courses)")->check(CLI::PositiveNumber);
   cmd->add_option("--cols", o->knit.cols, "stitches per row")->check(CLI::PositiveNumber);
-  cmd->add_option("--segments-per-stitch", o->knit.segments_per_stitch, "spline segments per stitch")
+  cmd->add_option("--segments-per-stitch", o->knit.segments_per_stitch,
+                  "spline segments per stitch")
       ->check(CLI::Range(4, 64));
   cmd->add_flag("--round", o->knit.in_the_round, "knit in the round (a tube)");
   cmd->add_option("--stitch-size", o->knit.stitch_size_cm,
@@ -92,9 +97,11 @@ void register_relax(CLI::App& app) {
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--contact-points", o->contact_points, "contact quadrature points per segment")
       ->check(CLI::Range(1, 64));
-  cmd->add_option("--shrink", o->shrink, "rest-length shrink factor c")->check(CLI::Range(0.5, 1.0));
-  cmd->add_option("--time-step", o->relax.time_step,
-                  "s (default 1/11800; 1/25000 with --from: imported swatches start tightly packed)")
+  cmd->add_option("--shrink", o->shrink, "rest-length shrink factor c")
+      ->check(CLI::Range(0.5, 1.0));
+  cmd->add_option(
+         "--time-step", o->relax.time_step,
+         "s (default 1/11800; 1/25000 with --from: imported swatches start tightly packed)")
       ->check(CLI::PositiveNumber);
   cmd->add_option("--max-time", o->relax.max_time, "simulated seconds at most")
       ->check(CLI::PositiveNumber);
@@ -123,7 +130,8 @@ void register_relax(CLI::App& app) {
     auto control = make_thread_control(o->threads);
 
     knit::State state;
-    state.q = Eigen::Map<const Eigen::VectorXd>(knit.control_points.data(), knit.control_points.size());
+    state.q =
+        Eigen::Map<const Eigen::VectorXd>(knit.control_points.data(), knit.control_points.size());
     state.v = Eigen::VectorXd::Zero(state.q.size());
     fs::create_directories(o->out);
     knit::write_state_file((fs::path(o->out) / "initial.kstate").string(),
@@ -136,27 +144,26 @@ void register_relax(CLI::App& app) {
     o->relax.out_dir = o->out;
     o->relax.progress = !o->quiet;
     o->relax.write_frames = !o->no_frames;
-    nlohmann::json extra = {
-        {"pattern", o->pattern},
-        {"rows", o->knit.rows},
-        {"cols", o->knit.cols},
-        {"in_the_round", o->knit.in_the_round},
-        {"segments_per_stitch", o->knit.segments_per_stitch},
-        {"shrink", o->shrink},
-        {"contact_points", o->contact_points},
-        {"generated",
-         {{"stitch_width_cm", knit.stitch_width_cm},
-          {"row_height_cm", knit.row_height_cm},
-          {"loop_depth_cm", knit.loop_depth_cm},
-          {"loop_length_cm", knit.loop_length_cm},
-          {"min_distance_ratio", knit.min_distance_ratio},
-          {"shape", knit::to_json(initial)}}}};
-    const knit::RunReport report = knit::relax(
-        sim, state, o->relax, extra,
-        [&](knit::Simulator&, const knit::State& st, nlohmann::json& summary) {
-          const nlohmann::json shape = knit::to_json(knit::measure_fabric(model, st.q));
-          for (const auto& [k, v] : shape.items()) summary[k] = v;
-        });
+    nlohmann::json extra = {{"pattern", o->pattern},
+                            {"rows", o->knit.rows},
+                            {"cols", o->knit.cols},
+                            {"in_the_round", o->knit.in_the_round},
+                            {"segments_per_stitch", o->knit.segments_per_stitch},
+                            {"shrink", o->shrink},
+                            {"contact_points", o->contact_points},
+                            {"generated",
+                             {{"stitch_width_cm", knit.stitch_width_cm},
+                              {"row_height_cm", knit.row_height_cm},
+                              {"loop_depth_cm", knit.loop_depth_cm},
+                              {"loop_length_cm", knit.loop_length_cm},
+                              {"min_distance_ratio", knit.min_distance_ratio},
+                              {"shape", knit::to_json(initial)}}}};
+    const knit::RunReport report =
+        knit::relax(sim, state, o->relax, extra,
+                    [&](knit::Simulator&, const knit::State& st, nlohmann::json& summary) {
+                      const nlohmann::json shape = knit::to_json(knit::measure_fabric(model, st.q));
+                      for (const auto& [k, v] : shape.items()) summary[k] = v;
+                    });
     fs::copy_file(fs::path(o->out) / "final.kstate", fs::path(o->out) / "relaxed.kstate",
                   fs::copy_options::overwrite_existing);
     print_report(report, o->out);

@@ -20,7 +20,9 @@ std::unique_ptr<tbb::global_control> make_thread_control(int threads) {
 }
 
 void add_export_option(CLI::App* cmd, std::string& format) {
-  cmd->add_option("--export", format, "also export the result: usd (every state, time-sampled), obj, bcc or ply (final state)")
+  cmd->add_option(
+         "--export", format,
+         "also export the result: usd (every state, time-sampled), obj, bcc or ply (final state)")
       ->check(CLI::IsMember({"usd", "obj", "bcc", "ply"}));
 }
 
@@ -32,15 +34,16 @@ void export_run(const std::string& out_dir, const std::string& format) {
     std::vector<knit::StateFile> frames;
     std::vector<double> times;
     const fs::path frames_dir = dir / "frames";
-    const std::vector<std::string> paths = fs::exists(frames_dir)
-                                               ? knit::list_state_files(frames_dir.string())
-                                               : std::vector<std::string>{(dir / "final.kstate").string()};
+    const std::vector<std::string> paths =
+        fs::exists(frames_dir) ? knit::list_state_files(frames_dir.string())
+                               : std::vector<std::string>{(dir / "final.kstate").string()};
     for (const std::string& p : paths) {
       frames.push_back(knit::read_state_file(p));
       times.push_back(frames.back().state.time);
     }
     knit::export_usd(frames, times, (dir / "frames.usda").string());
-    std::cout << "exported " << frames.size() << " states to " << (dir / "frames.usda").string() << "\n";
+    std::cout << "exported " << frames.size() << " states to " << (dir / "frames.usda").string()
+              << "\n";
     return;
   }
   const knit::StateFile final_state = knit::read_state_file((dir / "final.kstate").string());

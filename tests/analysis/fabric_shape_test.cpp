@@ -41,10 +41,13 @@ TEST(FabricShape, FlatSheetHasKnownSpacingAndNoCurl) {
 }
 
 TEST(FabricShape, MeasuresAreRotationInvariant) {
-  const Eigen::Matrix3d rot = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  const Eigen::Matrix3d rot =
+      Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
   Eigen::VectorXd q, qr;
   const Model m = grid(8, 8, 0.5, 0.4, q, [](Eigen::Vector3d p) { return p; });
-  const Model mr = grid(8, 8, 0.5, 0.4, qr, [&](Eigen::Vector3d p) { return Eigen::Vector3d(rot * p + Eigen::Vector3d(3, -1, 2)); });
+  const Model mr = grid(8, 8, 0.5, 0.4, qr, [&](Eigen::Vector3d p) {
+    return Eigen::Vector3d(rot * p + Eigen::Vector3d(3, -1, 2));
+  });
   const FabricShape a = measure_fabric(m, q), b = measure_fabric(mr, qr);
   EXPECT_NEAR(a.course_extent_cm, b.course_extent_cm, 1e-9);
   EXPECT_NEAR(a.wale_extent_cm, b.wale_extent_cm, 1e-9);

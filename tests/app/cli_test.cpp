@@ -51,8 +51,9 @@ TEST(Cli, PendulumExampleRunsAndSummarises) {
   ASSERT_EQ(r.code, 0) << r.output;
   std::ifstream in(out + "/summary.json");
   const auto s = nlohmann::json::parse(in);
-  for (const char* key : {"status", "steps", "sim_time_s", "wall_time_s", "threads", "yarns", "segments",
-                          "control_points", "max_length_violation", "kinetic_energy", "potential_energy"})
+  for (const char* key :
+       {"status", "steps", "sim_time_s", "wall_time_s", "threads", "yarns", "segments",
+        "control_points", "max_length_violation", "kinetic_energy", "potential_energy"})
     EXPECT_TRUE(s.contains(key)) << key;
   EXPECT_EQ(s["status"], "ok");
   EXPECT_EQ(s["steps"], 500);
@@ -87,13 +88,15 @@ namespace {
 
 TEST(Cli, RelaxSmallSwatchWritesShapeSummaryAndExport) {
   const std::string out = temp_dir("cli_relax");
-  const Result r = run("relax stockinette --rows 4 --cols 5 --max-time 0.005 --quiet --export obj --out " + out);
+  const Result r =
+      run("relax stockinette --rows 4 --cols 5 --max-time 0.005 --quiet --export obj --out " + out);
   ASSERT_EQ(r.code, 0) << r.output;
   std::ifstream in(out + "/summary.json");
   const auto s = nlohmann::json::parse(in);
-  for (const char* key : {"pattern", "rows", "cols", "course_extent_cm", "wale_extent_cm", "thickness_cm",
-                          "stitch_width_cm", "row_height_cm", "loop_length_cm", "edge_curl", "relaxed",
-                          "ke_per_length", "ke_per_length_threshold", "min_contact_distance"})
+  for (const char* key :
+       {"pattern", "rows", "cols", "course_extent_cm", "wale_extent_cm", "thickness_cm",
+        "stitch_width_cm", "row_height_cm", "loop_length_cm", "edge_curl", "relaxed",
+        "ke_per_length", "ke_per_length_threshold", "min_contact_distance"})
     EXPECT_TRUE(s.contains(key)) << key;
   EXPECT_EQ(s["rows"], 4);
   EXPECT_EQ(s["cols"], 5);
@@ -115,8 +118,9 @@ TEST(Cli, RelaxRejectsUnknownPatternAndWritesNothing) {
 
 TEST(Cli, SceneCanImportYarnFiles) {
   const std::string scene = ::testing::TempDir() + "/cli_import.json";
-  std::ofstream(scene) << R"({"yarns": [{"import": {"path": ")" << KNIT_SHARED_DATA
-                       << R"(/yarns/knit-2x2.yarns"}}], "gravity": [0,0,0], "params": {"contact": false},
+  std::ofstream(scene)
+      << R"({"yarns": [{"import": {"path": ")" << KNIT_SHARED_DATA
+      << R"(/yarns/knit-2x2.yarns"}}], "gravity": [0,0,0], "params": {"contact": false},
                               "time_step": 0.00002, "duration": 0.0002})";
   const std::string out = temp_dir("cli_import_out");
   const Result r = run("simulate " + scene + " --quiet --out " + out);

@@ -48,7 +48,8 @@ TEST(EnergyKernels, BendingGradientMatchesFiniteDifferences) {
   const QuadratureTable q = simpson_table(11);
   for (const Case& c : cases()) {
     // a straight yarn has zero bending gradient; perturb it off the line to test the kernel
-    const Vector12d x = std::string(c.name) == "straight" ? Vector12d(test::jitter(c.x, 0.02, 3)) : c.x;
+    const Vector12d x =
+        std::string(c.name) == "straight" ? Vector12d(test::jitter(c.x, 0.02, 3)) : c.x;
     Vector12d g = Vector12d::Zero();
     bending_kernel(x, 0.5, 5.0, q, &g);
     auto f = [&](const Eigen::VectorXd& y) {
@@ -81,7 +82,9 @@ TEST(EnergyKernels, GlobalDampingGradientMatchesFiniteDifferences) {
   const Vector12d u = test::jitter(Vector12d::Zero(), 3.0, 11);
   Vector12d g = Vector12d::Zero();
   global_damping_kernel(u, 1.5, &g);
-  auto f = [&](const Eigen::VectorXd& y) { return global_damping_kernel(Vector12d(y), 1.5, nullptr); };
+  auto f = [&](const Eigen::VectorXd& y) {
+    return global_damping_kernel(Vector12d(y), 1.5, nullptr);
+  };
   expect_gradient_matches(f, u, g, 1e-6, 1e-8, "global_damping");
 }
 
@@ -116,9 +119,15 @@ void check_assembled(const char* name) {
   EXPECT_NEAR(term.energy(m, q), term.add_force(m, q, v, tmp), 1e-9 * (1 + std::abs(e(q))));
 }
 
-TEST(AssembledEnergies, BendingForceIsMinusGradient) { check_assembled<BendingEnergy>("bending"); }
-TEST(AssembledEnergies, LengthForceIsMinusGradient) { check_assembled<LengthEnergy>("length"); }
-TEST(AssembledEnergies, GravityForceIsMinusGradient) { check_assembled<Gravity>("gravity"); }
+TEST(AssembledEnergies, BendingForceIsMinusGradient) {
+  check_assembled<BendingEnergy>("bending");
+}
+TEST(AssembledEnergies, LengthForceIsMinusGradient) {
+  check_assembled<LengthEnergy>("length");
+}
+TEST(AssembledEnergies, GravityForceIsMinusGradient) {
+  check_assembled<Gravity>("gravity");
+}
 
 TEST(AssembledEnergies, GlobalDampingForceIsMinusVelocityGradientAndDissipates) {
   Eigen::VectorXd q;
@@ -138,7 +147,8 @@ TEST(AssembledEnergies, GlobalDampingForceIsMinusVelocityGradientAndDissipates) 
   EXPECT_LT(f.dot(v), 0.0) << "damping must remove energy";
   // mass-proportional: every control point's velocity decays at the same rate 2k/(μ ℓ)
   for (int k = 0; k < m.num_cp(); ++k) {
-    const Eigen::Vector3d rate = -f.segment<3>(3 * k).cwiseQuotient(v.segment<3>(3 * k)) / m.mass[k];
+    const Eigen::Vector3d rate =
+        -f.segment<3>(3 * k).cwiseQuotient(v.segment<3>(3 * k)) / m.mass[k];
     const double expected = 2 * 1.5 / (m.params.density * m.rest_length[0] / 0.95);
     EXPECT_NEAR(rate.maxCoeff(), rate.minCoeff(), 1e-9 * expected) << "control point " << k;
     EXPECT_NEAR(rate[0], expected, 0.2 * expected) << "control point " << k;

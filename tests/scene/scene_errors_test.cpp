@@ -22,7 +22,8 @@ void expect_error(const std::string& text, std::initializer_list<const char*> ne
   const std::string msg = error_of(text);
   ASSERT_FALSE(msg.empty()) << "accepted: " << text;
   EXPECT_NE(msg.find("scene.json"), std::string::npos) << msg;
-  for (const char* n : needles) EXPECT_NE(msg.find(n), std::string::npos) << "'" << n << "' not in: " << msg;
+  for (const char* n : needles)
+    EXPECT_NE(msg.find(n), std::string::npos) << "'" << n << "' not in: " << msg;
 }
 
 const char* LINE = R"({"line": {"from": [0,0,0], "to": [4,0,0], "segments": 8}})";
@@ -32,23 +33,28 @@ std::string scene_with(const std::string& extra) {
 }
 
 TEST(SceneErrors, ValidSceneParses) {
-  const Scene s = parse_scene(nlohmann::json::parse(scene_with(R"(, "pins": [{"yarn": 0, "at": "start"}])")), "scene.json");
+  const Scene s = parse_scene(
+      nlohmann::json::parse(scene_with(R"(, "pins": [{"yarn": 0, "at": "start"}])")), "scene.json");
   EXPECT_EQ(s.model.num_seg(), 8);
   EXPECT_EQ(s.model.pins.size(), 1u);
-  EXPECT_NEAR((point_position(s.model, s.state.q, {0, 0.0}) - Eigen::Vector3d::Zero()).norm(), 0, 1e-12);
-  EXPECT_NEAR((point_position(s.model, s.state.q, {7, 1.0}) - Eigen::Vector3d(4, 0, 0)).norm(), 0, 1e-12);
+  EXPECT_NEAR((point_position(s.model, s.state.q, {0, 0.0}) - Eigen::Vector3d::Zero()).norm(), 0,
+              1e-12);
+  EXPECT_NEAR((point_position(s.model, s.state.q, {7, 1.0}) - Eigen::Vector3d(4, 0, 0)).norm(), 0,
+              1e-12);
 }
 
 TEST(SceneErrors, UnknownKeysAreNamed) {
   expect_error(scene_with(R"(, "gravty": [0,0,-981])"), {"gravty", "unknown key"});
   expect_error(scene_with(R"(, "params": {"k_bnd": 5})"), {"params.k_bnd", "unknown key"});
-  expect_error(R"({"yarns": [{"line": {"from": [0,0,0], "to": [1,0,0], "segments": 4, "colour": 1}}]})",
-               {"yarns[0].line.colour"});
+  expect_error(
+      R"({"yarns": [{"line": {"from": [0,0,0], "to": [1,0,0], "segments": 4, "colour": 1}}]})",
+      {"yarns[0].line.colour"});
 }
 
 TEST(SceneErrors, MissingFieldsAreNamed) {
   expect_error(R"({"time_step": 0.001})", {"yarns", "missing"});
-  expect_error(R"({"yarns": [{"line": {"from": [0,0,0], "segments": 4}}]})", {"yarns[0].line.to", "missing"});
+  expect_error(R"({"yarns": [{"line": {"from": [0,0,0], "segments": 4}}]})",
+               {"yarns[0].line.to", "missing"});
   expect_error(scene_with(R"(, "pins": [{"at": "start"}])"), {"pins[0].yarn", "missing"});
 }
 
@@ -58,7 +64,8 @@ TEST(SceneErrors, NegativeOrNonFiniteParametersAreRejected) {
   expect_error(scene_with(R"(, "time_step": -0.001)"), {"time_step", "positive"});
   expect_error(scene_with(R"(, "params": {"alpha_small": 1.5})"), {"params.alpha_small", "[0, 1]"});
   expect_error(scene_with(R"(, "params": {"k_len": "stiff"})"), {"params.k_len", "number"});
-  expect_error(scene_with(R"(, "params": {"quadrature_points": 10})"), {"quadrature_points", "odd"});
+  expect_error(scene_with(R"(, "params": {"quadrature_points": 10})"),
+               {"quadrature_points", "odd"});
   // JSON text has no NaN literal, but a document built in code can hold one
   nlohmann::json doc = nlohmann::json::parse(scene_with(""));
   doc["params"]["k_len"] = std::nan("");
@@ -71,18 +78,25 @@ TEST(SceneErrors, NegativeOrNonFiniteParametersAreRejected) {
 }
 
 TEST(SceneErrors, PinsAndGlueMustReferToExistingYarnsAndSegments) {
-  expect_error(scene_with(R"(, "pins": [{"yarn": 3, "at": "start"}])"), {"pins[0].yarn", "yarn 3 does not exist"});
-  expect_error(scene_with(R"(, "pins": [{"yarn": 0, "segment": 8, "t": 0.5}])"), {"pins[0].segment", "segment 8 does not exist", "8 segments"});
-  expect_error(scene_with(R"(, "pins": [{"yarn": 0, "segment": 2, "t": 1.5}])"), {"pins[0].t", "[0, 1]"});
-  expect_error(scene_with(R"(, "pins": [{"yarn": 0, "at": "middle"}])"), {"pins[0].at", "\"start\" or \"end\""});
-  expect_error(scene_with(R"(, "glue": [{"a": {"yarn": 0, "segment": 1}, "b": {"yarn": 1, "segment": 0}}])"),
-               {"glue[0].b.yarn", "does not exist"});
+  expect_error(scene_with(R"(, "pins": [{"yarn": 3, "at": "start"}])"),
+               {"pins[0].yarn", "yarn 3 does not exist"});
+  expect_error(scene_with(R"(, "pins": [{"yarn": 0, "segment": 8, "t": 0.5}])"),
+               {"pins[0].segment", "segment 8 does not exist", "8 segments"});
+  expect_error(scene_with(R"(, "pins": [{"yarn": 0, "segment": 2, "t": 1.5}])"),
+               {"pins[0].t", "[0, 1]"});
+  expect_error(scene_with(R"(, "pins": [{"yarn": 0, "at": "middle"}])"),
+               {"pins[0].at", "\"start\" or \"end\""});
+  expect_error(
+      scene_with(R"(, "glue": [{"a": {"yarn": 0, "segment": 1}, "b": {"yarn": 1, "segment": 0}}])"),
+      {"glue[0].b.yarn", "does not exist"});
 }
 
 TEST(SceneErrors, TooFewControlPoints) {
-  expect_error(R"({"yarns": [{"points": [[0,0,0],[1,0,0],[2,0,0]]}]})", {"yarns[0].points", "at least 4 control points", "got 3"});
+  expect_error(R"({"yarns": [{"points": [[0,0,0],[1,0,0],[2,0,0]]}]})",
+               {"yarns[0].points", "at least 4 control points", "got 3"});
   expect_error(R"({"yarns": []})", {"yarns", "at least 1"});
-  expect_error(R"({"yarns": [{"points": [[0,0,0],[1,0,0],[2,0],[3,0,0]]}]})", {"yarns[0].points[2]", "3 numbers"});
+  expect_error(R"({"yarns": [{"points": [[0,0,0],[1,0,0],[2,0],[3,0,0]]}]})",
+               {"yarns[0].points[2]", "3 numbers"});
 }
 
 TEST(SceneErrors, MalformedJsonNamesLineAndColumn) {

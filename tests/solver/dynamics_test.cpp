@@ -11,7 +11,8 @@ namespace {
 
 Eigen::Matrix3Xd line(int segments, double length) {
   Eigen::Matrix3Xd cp(3, segments + 3);
-  for (int k = 0; k < segments + 3; ++k) cp.col(k) = Eigen::Vector3d((k - 1) * length / segments, 0, 0);
+  for (int k = 0; k < segments + 3; ++k)
+    cp.col(k) = Eigen::Vector3d((k - 1) * length / segments, 0, 0);
   return cp;
 }
 
@@ -31,8 +32,8 @@ TEST(Dynamics, FreeYarnConservesMomentum) {
   s.q = b.positions();
   s.v.resize(s.q.size());
   for (int k = 0; k < sim.model().num_cp(); ++k)  // spin about z plus a drift, plus noise
-    s.v.segment<3>(3 * k) = Eigen::Vector3d(-s.q[3 * k + 1], s.q[3 * k], 0) * 3.0 +
-                            Eigen::Vector3d(1, 2, 0.5);
+    s.v.segment<3>(3 * k) =
+        Eigen::Vector3d(-s.q[3 * k + 1], s.q[3 * k], 0) * 3.0 + Eigen::Vector3d(1, 2, 0.5);
   s.v = test::jitter(s.v, 0.5, 3);
   const Eigen::Vector3d p0 = sim.linear_momentum(s), l0 = sim.angular_momentum(s);
   // the explicit midpoint step conserves linear momentum exactly and angular momentum to
@@ -41,7 +42,8 @@ TEST(Dynamics, FreeYarnConservesMomentum) {
   auto run = [&](double h) {
     Simulator sim2(sim.model());
     State st = s;
-    for (int i = 0; i < std::lround(0.2 / h); ++i) EXPECT_TRUE(sim2.step(st, h).ok()) << "step " << i;
+    for (int i = 0; i < std::lround(0.2 / h); ++i)
+      EXPECT_TRUE(sim2.step(st, h).ok()) << "step " << i;
     EXPECT_LT((sim2.linear_momentum(st) - p0).norm(), 1e-9 * (1 + p0.norm()))
         << "linear momentum drifted, h = " << h;
     return (sim2.angular_momentum(st) - l0).norm() / l0.norm();
@@ -68,7 +70,8 @@ double pendulum_energy_drift(double h, double duration) {
   const int steps = static_cast<int>(std::lround(duration / h));
   for (int i = 0; i < steps; ++i) {
     EXPECT_TRUE(sim.step(s, h).ok());
-    if (i % 100 == 0) max_rise = std::max(max_rise, sim.kinetic_energy(s) + sim.potential_energy(s) - e0);
+    if (i % 100 == 0)
+      max_rise = std::max(max_rise, sim.kinetic_energy(s) + sim.potential_energy(s) - e0);
   }
   const double mgl = sim.model().mass.sum() * 981 * 10.0;
   EXPECT_LT(max_rise, 0.01 * mgl) << "energy must not grow";
@@ -87,14 +90,15 @@ TEST(Dynamics, UndampedPendulumEnergyStaysWithinBound) {
 // correction of the projection (v += Δq/h after a midpoint step) leaves a steady O(h)
 // velocity residual although nothing moves; check that it shrinks with h.
 struct HangResult {
-  double max_drift_cm;  // largest control-point displacement over the last 0.2 s
+  double max_drift_cm;    // largest control-point displacement over the last 0.2 s
   double residual_speed;  // rms velocity at the end (cm/s)
 };
 
 HangResult hang(double h) {
   ModelBuilder b;
   Eigen::Matrix3Xd cp(3, 19);
-  for (int k = 0; k < 19; ++k) cp.col(k) = Eigen::Vector3d((k - 1) * 0.5, 0, -0.08 * (k - 1) * (15 - k));
+  for (int k = 0; k < 19; ++k)
+    cp.col(k) = Eigen::Vector3d((k - 1) * 0.5, 0, -0.08 * (k - 1) * (15 - k));
   b.add_yarn(cp);
   b.add_pin({{0, 0.0}, Eigen::Vector3d::Zero()});
   b.add_pin({{15, 1.0}, Eigen::Vector3d::Zero()});
@@ -107,7 +111,8 @@ HangResult hang(double h) {
   State s;
   s.q = b.positions();
   s.v = Eigen::VectorXd::Zero(s.q.size());
-  const int steps = static_cast<int>(std::lround(3.0 / h)), tail = static_cast<int>(std::lround(0.2 / h));
+  const int steps = static_cast<int>(std::lround(3.0 / h)),
+            tail = static_cast<int>(std::lround(0.2 / h));
   Eigen::VectorXd q_before;
   for (int i = 0; i < steps; ++i) {
     if (i == steps - tail) q_before = s.q;

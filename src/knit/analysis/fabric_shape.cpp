@@ -15,7 +15,8 @@ FabricShape measure_fabric(const Model& model, const Eigen::VectorXd& q) {
     s.cols = std::max(s.cols, c.col + 1);
   }
   if (s.rows < 2 || s.cols < 2)
-    throw std::invalid_argument("measure_fabric: the model needs stitch coordinates with at least 2 rows and 2 columns");
+    throw std::invalid_argument(
+        "measure_fabric: the model needs stitch coordinates with at least 2 rows and 2 columns");
   const int R = s.rows, C = s.cols;
   // stitch centroids from 4 samples per segment (both ends included)
   std::vector<Eigen::Vector3d> sum(R * C, Eigen::Vector3d::Zero());
@@ -36,8 +37,12 @@ FabricShape measure_fabric(const Model& model, const Eigen::VectorXd& q) {
       }
     }
   }
-  auto has = [&](int r, int c) { return r >= 0 && r < R && c >= 0 && c < C && count[r * C + c] > 0; };
-  auto centroid = [&](int r, int c) -> Eigen::Vector3d { return sum[r * C + c] / count[r * C + c]; };
+  auto has = [&](int r, int c) {
+    return r >= 0 && r < R && c >= 0 && c < C && count[r * C + c] > 0;
+  };
+  auto centroid = [&](int r, int c) -> Eigen::Vector3d {
+    return sum[r * C + c] / count[r * C + c];
+  };
   const int r0 = R / 4, r1 = std::max(r0 + 1, R - R / 4 - 1);
   const int c0 = C / 4, c1 = std::max(c0 + 1, C - C / 4 - 1);
   auto central = [&](int r, int c) { return r >= r0 && r <= r1 && c >= c0 && c <= c1; };

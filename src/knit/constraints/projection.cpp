@@ -196,7 +196,8 @@ void FastProjection::evaluate_impl(const Model& model, const Eigen::VectorXd& q,
     row += 3;
   }
   for (const Glue& glue : model.glues) {
-    c.segment<3>(row) = point_position(model, q, glue.a) - point_position(model, q, glue.b) - glue.offset(time);
+    c.segment<3>(row) =
+        point_position(model, q, glue.a) - point_position(model, q, glue.b) - glue.offset(time);
     row += 3;
   }
 }

@@ -82,87 +82,90 @@ void RigidRegionPass::velocity_change(const SampleSegments& samples, const Eigen
   const int nseg = static_cast<int>(m_seg_begin.size()) - 1;
   auto share = [&](int seg) { return m_seg_begin[seg + 1] - m_seg_begin[seg]; };
   m_moments.resize(nseg);
-  tbb::parallel_for(tbb::blocked_range<int>(0, nseg, 64), [&](const tbb::blocked_range<int>& range) {
-    for (int i = range.begin(); i < range.end(); ++i) {
-      Moments& mo = m_moments[i];
-      mo.m = 0;
-      mo.mx.setZero();
-      mo.mu.setZero();
-      mo.xu.setZero();
-      mo.xx.setZero();
-      if (share(i) == 0) continue;
-      const double inv_share = 1.0 / share(i);
-      for (int k = 0; k < per; ++k) {
-        const int s = i * per + k;
-        const double w = samples.mass(s) * inv_share;
-        const Eigen::Vector3d xs = x.col(s), us = u.col(s);
-        mo.m += w;
-        mo.mx += w * xs;
-        mo.mu += w * us;
-        mo.xu += w * xs.cross(us);
-        mo.xx.noalias() += w * xs * xs.transpose();
-      }
-    }
-  });
+  tbb::parallel_for(tbb::blocked_range<int>(0, nseg, 64),
+                    [&](const tbb::blocked_range<int>& range) {
+                      for (int i = range.begin(); i < range.end(); ++i) {
+                        Moments& mo = m_moments[i];
+                        mo.m = 0;
+                        mo.mx.setZero();
+                        mo.mu.setZero();
+                        mo.xu.setZero();
+                        mo.xx.setZero();
+                        if (share(i) == 0) continue;
+                        const double inv_share = 1.0 / share(i);
+                        for (int k = 0; k < per; ++k) {
+                          const int s = i * per + k;
+                          const double w = samples.mass(s) * inv_share;
+                          const Eigen::Vector3d xs = x.col(s), us = u.col(s);
+                          mo.m += w;
+                          mo.mx += w * xs;
+                          mo.mu += w * us;
+                          mo.xu += w * xs.cross(us);
+                          mo.xx.noalias() += w * xs * xs.transpose();
+                        }
+                      }
+                    });
   // rigid motion of every region, each computed alone from the same velocities
   m_fit.assign(m_regions.size(), RigidFit{});
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, m_regions.size(), 16),
-                    [&](const tbb::blocked_range<size_t>& range) {
-    for (size_t r = range.begin(); r < range.end(); ++r) {
-      Moments sum;
-      sum.mx.setZero();
-      sum.mu.setZero();
-      sum.xu.setZero();
-      sum.xx.setZero();
-      for (int i : m_regions[r]) {
-        const Moments& mo = m_moments[i];
-        sum.m += mo.m;
-        sum.mx += mo.mx;
-        sum.mu += mo.mu;
-        sum.xu += mo.xu;
-        sum.xx += mo.xx;
-      }
-      if (!(sum.m > 0)) continue;
-      RigidFit& f = m_fit[r];
-      f.centre = sum.mx / sum.m;
-      f.velocity = sum.mu / sum.m;
-      // about the centre: L = Σw (x−c)×(u−v) = Σw x×u − c×Σw u,
-      // I = tr(S)·1 − S with S = Σw (x−c)(x−c)ᵀ = Σw x xᵀ − m c cᵀ
-      const Eigen::Vector3d l = sum.xu - f.centre.cross(sum.mu);
-      const Eigen::Matrix3d spread = sum.xx - sum.m * f.centre * f.centre.transpose();
-      const Eigen::Matrix3d inertia = spread.trace() * Eigen::Matrix3d::Identity() - spread;
-      // ω = I⁺ L: eigen-directions with (relatively) no inertia get no spin
-      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(inertia);
-      const double top = eig.eigenvalues().maxCoeff();
-      for (int a = 0; a < 3; ++a) {
-        const double lambda = eig.eigenvalues()[a];
-        if (lambda > 1e-10 * top) {
-          const Eigen::Vector3d e = eig.eigenvectors().col(a);
-          f.omega += e * (e.dot(l) / lambda);
+  tbb::parallel_for(
+      tbb::blocked_range<size_t>(0, m_regions.size(), 16),
+      [&](const tbb::blocked_range<size_t>& range) {
+        for (size_t r = range.begin(); r < range.end(); ++r) {
+          Moments sum;
+          sum.mx.setZero();
+          sum.mu.setZero();
+          sum.xu.setZero();
+          sum.xx.setZero();
+          for (int i : m_regions[r]) {
+            const Moments& mo = m_moments[i];
+            sum.m += mo.m;
+            sum.mx += mo.mx;
+            sum.mu += mo.mu;
+            sum.xu += mo.xu;
+            sum.xx += mo.xx;
+          }
+          if (!(sum.m > 0)) continue;
+          RigidFit& f = m_fit[r];
+          f.centre = sum.mx / sum.m;
+          f.velocity = sum.mu / sum.m;
+          // about the centre: L = Σw (x−c)×(u−v) = Σw x×u − c×Σw u,
+          // I = tr(S)·1 − S with S = Σw (x−c)(x−c)ᵀ = Σw x xᵀ − m c cᵀ
+          const Eigen::Vector3d l = sum.xu - f.centre.cross(sum.mu);
+          const Eigen::Matrix3d spread = sum.xx - sum.m * f.centre * f.centre.transpose();
+          const Eigen::Matrix3d inertia = spread.trace() * Eigen::Matrix3d::Identity() - spread;
+          // ω = I⁺ L: eigen-directions with (relatively) no inertia get no spin
+          const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(inertia);
+          const double top = eig.eigenvalues().maxCoeff();
+          for (int a = 0; a < 3; ++a) {
+            const double lambda = eig.eigenvalues()[a];
+            if (lambda > 1e-10 * top) {
+              const Eigen::Vector3d e = eig.eigenvectors().col(a);
+              f.omega += e * (e.dot(l) / lambda);
+            }
+          }
         }
-      }
-    }
-  });
+      });
   // every sample moves toward the mean of its regions' rigid velocities:
   // mean_r (v_r + ω_r × (x − c_r)) = A + B × x,  A = mean (v_r − ω_r × c_r), B = mean ω_r
-  tbb::parallel_for(tbb::blocked_range<int>(0, nseg, 64), [&](const tbb::blocked_range<int>& range) {
-    for (int i = range.begin(); i < range.end(); ++i) {
-      const int n = share(i);
-      if (n == 0) continue;
-      Eigen::Vector3d a = Eigen::Vector3d::Zero(), b = Eigen::Vector3d::Zero();
-      for (int j = m_seg_begin[i]; j < m_seg_begin[i + 1]; ++j) {
-        const RigidFit& f = m_fit[m_seg_regions[j]];
-        a += f.velocity - f.omega.cross(f.centre);
-        b += f.omega;
-      }
-      a /= n;
-      b /= n;
-      for (int k = 0; k < per; ++k) {
-        const int s = i * per + k;
-        dv.col(s) += m_alpha * (a + b.cross(x.col(s)) - u.col(s));
-      }
-    }
-  });
+  tbb::parallel_for(tbb::blocked_range<int>(0, nseg, 64),
+                    [&](const tbb::blocked_range<int>& range) {
+                      for (int i = range.begin(); i < range.end(); ++i) {
+                        const int n = share(i);
+                        if (n == 0) continue;
+                        Eigen::Vector3d a = Eigen::Vector3d::Zero(), b = Eigen::Vector3d::Zero();
+                        for (int j = m_seg_begin[i]; j < m_seg_begin[i + 1]; ++j) {
+                          const RigidFit& f = m_fit[m_seg_regions[j]];
+                          a += f.velocity - f.omega.cross(f.centre);
+                          b += f.omega;
+                        }
+                        a /= n;
+                        b /= n;
+                        for (int k = 0; k < per; ++k) {
+                          const int s = i * per + k;
+                          dv.col(s) += m_alpha * (a + b.cross(x.col(s)) - u.col(s));
+                        }
+                      }
+                    });
 }
 
 namespace {

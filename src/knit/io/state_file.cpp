@@ -117,7 +117,8 @@ StateFile read_state_file(const std::string& path) {
   ss << in.rdbuf();
   const std::string data = ss.str();
   detail::ByteReader r(data, path);
-  if (r.bytes(8, "magic") != std::string_view(MAGIC, 8)) r.fail_at(0, "not a knitsim state file (bad magic)");
+  if (r.bytes(8, "magic") != std::string_view(MAGIC, 8))
+    r.fail_at(0, "not a knitsim state file (bad magic)");
   const auto version = r.get<uint32_t>("version");
   if (version != STATE_FILE_VERSION)
     r.fail("unsupported state file version " + std::to_string(version) + " (this build reads " +

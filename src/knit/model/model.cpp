@@ -114,8 +114,7 @@ Model ModelBuilder::build(const Params& params, double rest_scale) const {
                               " does not exist (the model has " + std::to_string(seg) +
                               " segments)");
     if (!(p.t >= 0 && p.t <= 1))
-      throw std::out_of_range(what + ": parameter t must lie in [0,1], got " +
-                              std::to_string(p.t));
+      throw std::out_of_range(what + ": parameter t must lie in [0,1], got " + std::to_string(p.t));
   };
   for (size_t k = 0; k < m_pins.size(); ++k) check_point(m_pins[k].at, "pin " + std::to_string(k));
   for (size_t k = 0; k < m_glues.size(); ++k) {

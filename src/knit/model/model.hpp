@@ -63,16 +63,16 @@ class Model {
  public:
   Params params;
   std::vector<YarnInfo> yarns;
-  std::vector<int> seg_cp;             ///< first control point of each segment
-  std::vector<int> seg_yarn;           ///< yarn of each segment
-  std::vector<double> rest_length;     ///< ℓ_i (cm), already scaled by any shrink factor
-  std::vector<StitchCoord> stitch;     ///< per segment (may be all −1)
-  Eigen::VectorXd mass;                ///< lumped mass per control point (g)
-  Eigen::VectorXd inv_mass3;           ///< 1/m per coordinate (length 3·num_cp)
+  std::vector<int> seg_cp;          ///< first control point of each segment
+  std::vector<int> seg_yarn;        ///< yarn of each segment
+  std::vector<double> rest_length;  ///< ℓ_i (cm), already scaled by any shrink factor
+  std::vector<StitchCoord> stitch;  ///< per segment (may be all −1)
+  Eigen::VectorXd mass;             ///< lumped mass per control point (g)
+  Eigen::VectorXd inv_mass3;        ///< 1/m per coordinate (length 3·num_cp)
   std::vector<Pin> pins;
   std::vector<Glue> glues;
-  QuadratureTable quad;                ///< energy quadrature (Simpson)
-  QuadratureTable contact_quad;        ///< contact quadrature (midpoint)
+  QuadratureTable quad;          ///< energy quadrature (Simpson)
+  QuadratureTable contact_quad;  ///< contact quadrature (midpoint)
 
   int num_cp() const { return static_cast<int>(mass.size()); }
   int num_seg() const { return static_cast<int>(seg_cp.size()); }

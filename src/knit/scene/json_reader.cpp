@@ -16,8 +16,8 @@ std::string describe(const nlohmann::json& v) {
 }  // namespace
 
 void JsonReader::fail(const std::string& expected) const {
-  throw InputError(m_source + ": " + (m_path.empty() ? std::string("(top level)") : m_path) +
-                   ": " + expected);
+  throw InputError(m_source + ": " + (m_path.empty() ? std::string("(top level)") : m_path) + ": " +
+                   expected);
 }
 
 JsonReader JsonReader::at(const std::string& key) const {
@@ -67,8 +67,8 @@ double JsonReader::number() const {
 double JsonReader::positive(bool allow_zero) const {
   const double x = number();
   if (allow_zero ? x < 0 : x <= 0)
-    fail(std::string("expected a ") + (allow_zero ? "non-negative" : "positive") +
-         " number, got " + describe(m_value));
+    fail(std::string("expected a ") + (allow_zero ? "non-negative" : "positive") + " number, got " +
+         describe(m_value));
   return x;
 }
 

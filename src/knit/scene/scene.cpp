@@ -40,10 +40,12 @@ std::vector<Eigen::Matrix3Xd> parse_import(const JsonReader& y, const std::strin
     if (imp.has("segments_per_cm")) opt.segments_per_cm = imp.at("segments_per_cm").positive();
   }
   const std::filesystem::path base = std::filesystem::path(scene_path).parent_path();
-  const std::filesystem::path full = std::filesystem::path(path).is_absolute() ? std::filesystem::path(path) : base / path;
+  const std::filesystem::path full =
+      std::filesystem::path(path).is_absolute() ? std::filesystem::path(path) : base / path;
   std::vector<Eigen::Matrix3Xd> out;
   try {
-    for (const ImportedYarn& yarn : import_yarns(full.string(), opt)) out.push_back(yarn.control_points);
+    for (const ImportedYarn& yarn : import_yarns(full.string(), opt))
+      out.push_back(yarn.control_points);
   } catch (const std::exception& e) {
     imp.fail(e.what());
   }
@@ -52,9 +54,12 @@ std::vector<Eigen::Matrix3Xd> parse_import(const JsonReader& y, const std::strin
 
 Eigen::Matrix3Xd parse_yarn(const JsonReader& y) {
   y.allow_keys({"points", "polyline", "segments", "line", "helix", "circle", "import"});
-  int kinds = y.has("points") + y.has("polyline") + y.has("line") + y.has("helix") + y.has("circle");
+  int kinds =
+      y.has("points") + y.has("polyline") + y.has("line") + y.has("helix") + y.has("circle");
   if (kinds != 1)
-    y.fail("expected exactly one of \"points\", \"polyline\", \"line\", \"helix\", \"circle\", \"import\"");
+    y.fail(
+        "expected exactly one of \"points\", \"polyline\", \"line\", \"helix\", \"circle\", "
+        "\"import\"");
   if (y.has("segments") && !y.has("polyline"))
     y.at("segments").fail("\"segments\" belongs to a \"polyline\" yarn");
   if (y.has("points")) {
@@ -166,7 +171,8 @@ Params parse_params(const JsonReader& r, Params p) {
   if (r.has("k_contact")) p.k_contact = r.at("k_contact").positive(true);
   if (r.has("k_dt")) p.k_dt = r.at("k_dt").positive(true);
   if (r.has("k_dn")) p.k_dn = r.at("k_dn").positive(true);
-  for (auto [key, dst] : {std::pair{"alpha_small", &p.alpha_small}, {"alpha_large", &p.alpha_large}}) {
+  for (auto [key, dst] :
+       {std::pair{"alpha_small", &p.alpha_small}, {"alpha_large", &p.alpha_large}}) {
     if (!r.has(key)) continue;
     *dst = r.at(key).positive(true);
     if (*dst > 1) r.at(key).fail("expected a value in [0, 1]");
@@ -179,7 +185,8 @@ Params parse_params(const JsonReader& r, Params p) {
   if (r.has("contact_points")) p.contact_points = r.at("contact_points").integer(1);
   if (r.has("length_constraints")) p.length_constraints = r.at("length_constraints").boolean();
   if (r.has("contact")) p.contact = r.at("contact").boolean();
-  if (r.has("constraint_tolerance")) p.constraint_tolerance = r.at("constraint_tolerance").positive();
+  if (r.has("constraint_tolerance"))
+    p.constraint_tolerance = r.at("constraint_tolerance").positive();
   if (r.has("max_projection_iterations"))
     p.max_projection_iterations = r.at("max_projection_iterations").integer(1);
   return p;

@@ -10,10 +10,10 @@
 namespace knit {
 
 struct RelaxOptions {
-  double time_step = 1.0 / 11800;    ///< s
-  double max_time = 2.0;             ///< s of simulated time at most
-  double ke_per_length = 1e-5;       ///< erg/cm: rest when ½ vᵀMv / L falls below
-  int check_every = 200;             ///< steps between rest checks (and written states)
+  double time_step = 1.0 / 11800;  ///< s
+  double max_time = 2.0;           ///< s of simulated time at most
+  double ke_per_length = 1e-5;     ///< erg/cm: rest when ½ vᵀMv / L falls below
+  int check_every = 200;           ///< steps between rest checks (and written states)
   std::string out_dir;
   bool progress = true;
   bool write_frames = true;

@@ -69,8 +69,7 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
   log << std::setprecision(10);
 
   RunReport report;
-  const long long total_steps =
-      std::max<long long>(0, std::llround(opt.duration / opt.time_step));
+  const long long total_steps = std::max<long long>(0, std::llround(opt.duration / opt.time_step));
   const auto t0 = Clock::now();
   auto last_progress = t0;
   auto last_output = t0;
@@ -88,10 +87,12 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
     const ContactReport cr = contact_report(sim);
     log << state.time << "," << sim.kinetic_energy(state) << "," << sim.potential_energy(state)
         << "," << sim.max_violation(state) << "," << (cr.present ? cr.pairs_in_contact : 0) << ","
-        << (cr.present && std::isfinite(cr.min_distance_ratio) ? cr.min_distance_ratio : -1)
-        << "," << (dsteps > 0 ? wall / dsteps : 0.0) << "\n" << std::flush;
+        << (cr.present && std::isfinite(cr.min_distance_ratio) ? cr.min_distance_ratio : -1) << ","
+        << (dsteps > 0 ? wall / dsteps : 0.0) << "\n"
+        << std::flush;
     if (opt.write_frames)
-      write_state_file((dir / "frames" / frame_name(frame)).string(), make_state_file(model, state));
+      write_state_file((dir / "frames" / frame_name(frame)).string(),
+                       make_state_file(model, state));
     ++frame;
     last_output = Clock::now();
     last_output_step = report.steps;
@@ -172,7 +173,8 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
   s["potential_energy"] = sim.potential_energy(state);
   if (contact_samples > 0) {
     s["contact_pairs_mean"] = contact_pairs_sum / contact_samples;
-    s["min_contact_distance"] = std::isfinite(min_d) ? nlohmann::json(min_d) : nlohmann::json(nullptr);
+    s["min_contact_distance"] =
+        std::isfinite(min_d) ? nlohmann::json(min_d) : nlohmann::json(nullptr);
   }
   nlohmann::json stages = nlohmann::json::object();
   for (const auto& [name, sec] : sim.stage_seconds()) stages[name] = sec;

@@ -45,9 +45,12 @@ std::pair<double, int> max_travel(const Eigen::VectorXd& a, const Eigen::VectorX
 
 const char* status_word(StepStatus status) {
   switch (status) {
-    case StepStatus::OK: return "ok";
-    case StepStatus::NON_FINITE: return "unstable";
-    case StepStatus::PROJECTION_FAILED: return "projection_failed";
+    case StepStatus::OK:
+      return "ok";
+    case StepStatus::NON_FINITE:
+      return "unstable";
+    case StepStatus::PROJECTION_FAILED:
+      return "projection_failed";
   }
   return "unknown";
 }
@@ -95,8 +98,7 @@ void Simulator::unconstrained_step(const State& s, double h, Eigen::VectorXd& q_
   v_out = s.v + h * inv_m.cwiseProduct(m_force);
 }
 
-ProjectionResult Simulator::project(Eigen::VectorXd& q, Eigen::VectorXd& v, double time,
-                                    double h) {
+ProjectionResult Simulator::project(Eigen::VectorXd& q, Eigen::VectorXd& v, double time, double h) {
   ScopedTimer timer(m_seconds["projection"]);
   m_qpre = q;
   ProjectionResult res = m_projection.project(m_model, q, time);
@@ -128,9 +130,9 @@ StepResult Simulator::step(State& state, double h) {
   res.projection = project(m_qnew, m_vnew, t_new, h);
   if (!res.projection.converged) {
     std::ostringstream msg;
-    msg << "constraint projection did not converge at t = " << t_new << " s (max |C| = "
-        << res.projection.max_violation << " after " << res.projection.iterations
-        << " iterations); try a smaller time step";
+    msg << "constraint projection did not converge at t = " << t_new
+        << " s (max |C| = " << res.projection.max_violation << " after "
+        << res.projection.iterations << " iterations); try a smaller time step";
     res.status = StepStatus::PROJECTION_FAILED;
     res.message = msg.str();
     return res;
@@ -150,9 +152,8 @@ StepResult Simulator::step(State& state, double h) {
     while (cp >= m_model.yarns[yarn].cp_end) ++yarn;
     std::ostringstream msg;
     msg << "control point " << cp - m_model.yarns[yarn].cp_begin << " of yarn " << yarn << " moved "
-        << travel << " cm in one step at t = " << t_new
-        << " s, more than the yarn radius (" << m_model.params.radius
-        << " cm): the run is unstable; try a smaller time step";
+        << travel << " cm in one step at t = " << t_new << " s, more than the yarn radius ("
+        << m_model.params.radius << " cm): the run is unstable; try a smaller time step";
     res.status = StepStatus::NON_FINITE;
     res.message = msg.str();
     return res;
@@ -165,7 +166,8 @@ StepResult Simulator::step(State& state, double h) {
 
 double Simulator::kinetic_energy(const State& s) const {
   double e = 0;
-  for (int k = 0; k < m_model.num_cp(); ++k) e += m_model.mass[k] * s.v.segment<3>(3 * k).squaredNorm();
+  for (int k = 0; k < m_model.num_cp(); ++k)
+    e += m_model.mass[k] * s.v.segment<3>(3 * k).squaredNorm();
   return 0.5 * e;
 }
 

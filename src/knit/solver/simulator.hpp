@@ -42,7 +42,9 @@ class Simulator {
 
   const Model& model() const { return m_model; }
   void add_term(std::unique_ptr<Term> term) { m_terms.push_back(std::move(term)); }
-  void add_filter(std::unique_ptr<VelocityFilter> filter) { m_filters.push_back(std::move(filter)); }
+  void add_filter(std::unique_ptr<VelocityFilter> filter) {
+    m_filters.push_back(std::move(filter));
+  }
   /// The term with this name, or nullptr.
   Term* find_term(std::string_view name) const;
   const std::vector<std::unique_ptr<Term>>& terms() const { return m_terms; }
@@ -74,7 +76,9 @@ class Simulator {
   /// Angular momentum about the origin Σ m_k q_k × v_k (g cm²/s).
   Eigen::Vector3d angular_momentum(const State& state) const;
   /// max |C| over all constraints at the state's time.
-  double max_violation(const State& state) { return m_projection.max_violation(m_model, state.q, state.time); }
+  double max_violation(const State& state) {
+    return m_projection.max_violation(m_model, state.q, state.time);
+  }
 
   /// Wall-clock seconds spent in each stage so far (term names, "projection", filter names).
   const std::map<std::string, double>& stage_seconds() const { return m_seconds; }
