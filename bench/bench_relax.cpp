@@ -1,6 +1,7 @@
 // Wall time to relax a knitted sample to rest (default 42×32 stockinette, relaxation
 // parameters of MODEL.md §8, 10 contact points) and the steps taken.
 //   bench_relax [--pattern P] [--rows R] [--cols C] [--max-time S] [--threads N]
+#include <CLI/CLI.hpp>
 #include <iostream>
 
 #include "bench_util.hpp"
@@ -10,23 +11,13 @@ int main(int argc, char** argv) {
   std::string pattern = "stockinette";
   int rows = 42, cols = 32, threads = 0;
   double max_time = 2.0;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string a = argv[i], v = argv[i + 1];
-    if (a == "--pattern")
-      pattern = v;
-    else if (a == "--rows")
-      rows = std::stoi(v);
-    else if (a == "--cols")
-      cols = std::stoi(v);
-    else if (a == "--max-time")
-      max_time = std::stod(v);
-    else if (a == "--threads")
-      threads = std::stoi(v);
-    else {
-      std::cerr << "bench_relax: unknown option " << a << "\n";
-      return 1;
-    }
-  }
+  CLI::App app{"bench_relax: wall time to relax a knitted sample"};
+  app.add_option("--pattern", pattern);
+  app.add_option("--rows", rows);
+  app.add_option("--cols", cols);
+  app.add_option("--max-time", max_time, "simulated seconds");
+  app.add_option("--threads", threads, "0 = all cores");
+  CLI11_PARSE(app, argc, argv);
   std::unique_ptr<tbb::global_control> gc;
   if (threads > 0)
     gc = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,

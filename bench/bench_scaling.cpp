@@ -2,27 +2,19 @@
 // samples, 20 contact points): cost should grow linearly with size. Reports the
 // least-squares slope of ms/step against segments and the spread of µs/segment-step.
 //   bench_scaling [--contact-points N] [--steps N] [--threads N] [--max-segments N]
+#include <CLI/CLI.hpp>
 #include <iostream>
 
 #include "bench_util.hpp"
 
 int main(int argc, char** argv) {
   int points = 20, steps = 5, threads = 0, max_segments = 70000;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string a = argv[i], v = argv[i + 1];
-    if (a == "--contact-points")
-      points = std::stoi(v);
-    else if (a == "--steps")
-      steps = std::stoi(v);
-    else if (a == "--threads")
-      threads = std::stoi(v);
-    else if (a == "--max-segments")
-      max_segments = std::stoi(v);
-    else {
-      std::cerr << "bench_scaling: unknown option " << a << "\n";
-      return 1;
-    }
-  }
+  CLI::App app{"bench_scaling: µs per segment-step from ~1k to ~64k segments"};
+  app.add_option("--contact-points", points);
+  app.add_option("--steps", steps);
+  app.add_option("--threads", threads, "0 = all cores");
+  app.add_option("--max-segments", max_segments);
+  CLI11_PARSE(app, argc, argv);
   std::unique_ptr<tbb::global_control> gc;
   if (threads > 0)
     gc = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,

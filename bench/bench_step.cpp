@@ -3,6 +3,7 @@
 // stage as in the paper's Table 2.
 //   bench_step [--state relaxed.kstate] [--pattern P] [--rows R] [--cols C]
 //              [--contact-points N] [--steps N] [--threads N]
+#include <CLI/CLI.hpp>
 #include <iostream>
 
 #include "bench_util.hpp"
@@ -10,27 +11,15 @@
 int main(int argc, char** argv) {
   std::string state, pattern = "stockinette";
   int rows = 42, cols = 32, points = 20, steps = 20, threads = 0;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string a = argv[i], v = argv[i + 1];
-    if (a == "--state")
-      state = v;
-    else if (a == "--pattern")
-      pattern = v;
-    else if (a == "--rows")
-      rows = std::stoi(v);
-    else if (a == "--cols")
-      cols = std::stoi(v);
-    else if (a == "--contact-points")
-      points = std::stoi(v);
-    else if (a == "--steps")
-      steps = std::stoi(v);
-    else if (a == "--threads")
-      threads = std::stoi(v);
-    else {
-      std::cerr << "bench_step: unknown option " << a << "\n";
-      return 1;
-    }
-  }
+  CLI::App app{"bench_step: full simulation steps on a knitted sample"};
+  app.add_option("--state", state, "relaxed .kstate of the same pattern and size");
+  app.add_option("--pattern", pattern);
+  app.add_option("--rows", rows);
+  app.add_option("--cols", cols);
+  app.add_option("--contact-points", points);
+  app.add_option("--steps", steps);
+  app.add_option("--threads", threads, "0 = all cores");
+  CLI11_PARSE(app, argc, argv);
   std::unique_ptr<tbb::global_control> gc;
   if (threads > 0)
     gc = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,

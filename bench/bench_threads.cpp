@@ -1,5 +1,6 @@
 // The step benchmark on 1 and on 2 threads (or --max-threads): speed-up and parallel
 // efficiency.   bench_threads [--state relaxed.kstate] [--rows R] [--cols C] [--steps N]
+#include <CLI/CLI.hpp>
 #include <iostream>
 
 #include "bench_util.hpp"
@@ -7,25 +8,14 @@
 int main(int argc, char** argv) {
   std::string state;
   int rows = 42, cols = 32, points = 20, steps = 10, max_threads = 2;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string a = argv[i], v = argv[i + 1];
-    if (a == "--state")
-      state = v;
-    else if (a == "--rows")
-      rows = std::stoi(v);
-    else if (a == "--cols")
-      cols = std::stoi(v);
-    else if (a == "--contact-points")
-      points = std::stoi(v);
-    else if (a == "--steps")
-      steps = std::stoi(v);
-    else if (a == "--max-threads")
-      max_threads = std::stoi(v);
-    else {
-      std::cerr << "bench_threads: unknown option " << a << "\n";
-      return 1;
-    }
-  }
+  CLI::App app{"bench_threads: the step benchmark on 1 and 2 threads"};
+  app.add_option("--state", state, "relaxed .kstate of a stockinette of the same size");
+  app.add_option("--rows", rows);
+  app.add_option("--cols", cols);
+  app.add_option("--contact-points", points);
+  app.add_option("--steps", steps);
+  app.add_option("--max-threads", max_threads);
+  CLI11_PARSE(app, argc, argv);
   nlohmann::json runs = nlohmann::json::array();
   double base = 0;
   for (int t = 1; t <= max_threads; t *= 2) {
