@@ -10,6 +10,16 @@ build_dir=${KNIT_FUZZ_BUILD_DIR:-build-fuzz}
 jobs=${KNIT_JOBS:-1}
 targets=(fuzz_yarns fuzz_bcc fuzz_obj fuzz_kstate)
 
+# a machine without clang's libFuzzer runtime cannot fuzz: say so and stop cleanly
+probe=$(mktemp -d)
+echo 'extern "C" int LLVMFuzzerTestOneInput(const unsigned char*, unsigned long) { return 0; }' >"$probe/p.cpp"
+if ! command -v clang++ >/dev/null || ! clang++ -fsanitize=fuzzer "$probe/p.cpp" -o "$probe/p" 2>/dev/null; then
+  rm -rf "$probe"
+  echo "fuzz: skipped (clang++ with -fsanitize=fuzzer is not available here)"
+  exit 0
+fi
+rm -rf "$probe"
+
 if [ ! -f "$build_dir/build.ninja" ]; then
   CC=clang CXX=clang++ cmake -S . -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
     -DKNIT_BUILD_FUZZ=ON -DKNIT_BUILD_TESTS=OFF -DKNIT_BUILD_BENCH=OFF >/dev/null
