@@ -134,3 +134,19 @@ TEST(Cli, SceneCanImportYarnFiles) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST(Cli, RenderingARunDirectoryRendersItsFrames) {
+  const std::string out = temp_dir("cli_run_frames");
+  ASSERT_EQ(run(std::string("simulate ") + KNIT_EXAMPLES +
+                "/pendulum.json --duration 0.02 --quiet --out " + out)
+                .code,
+            0);
+  const std::string png = temp_dir("cli_run_frames_png");
+  const Result r = run("render " + out + " --out " + png + " --size 64x48 --spp 1");
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_TRUE(fs::exists(png + "/frame_0002.png")) << r.output;  // initial + 2 outputs
+}
+
+}  // namespace

@@ -66,6 +66,13 @@ StateFile load_state(const std::string& path) {
 
 std::vector<std::string> list_state_files(const std::string& dir) {
   namespace fs = std::filesystem;
+  // a run directory (simulate/relax output) keeps its sequence under frames/
+  std::error_code probe;
+  if (fs::is_directory(fs::path(dir) / "frames", probe)) {
+    for (const auto& e : fs::directory_iterator(fs::path(dir) / "frames", probe))
+      if (e.is_regular_file() && e.path().extension() == ".kstate")
+        return list_state_files((fs::path(dir) / "frames").string());
+  }
   std::vector<std::string> files;
   std::error_code ec;
   for (const auto& e : fs::directory_iterator(dir, ec))

@@ -26,7 +26,8 @@ StateFile state_from_yarns(const std::vector<ImportedYarn>& yarns);
 /// Reads a .kstate file, or imports a .yarns/.bcc/.obj file with default options.
 StateFile load_state(const std::string& path);
 
-/// The .kstate files of a directory, sorted by name. Throws when there are none.
+/// The .kstate files of a directory, sorted by name; for a run directory (one holding
+/// frames/*.kstate) the frames. Throws when there are none.
 std::vector<std::string> list_state_files(const std::string& dir);
 
 }  // namespace knit
