@@ -47,7 +47,8 @@ void JsonReader::require_array(size_t min_size) const {
 
 void JsonReader::allow_keys(std::initializer_list<const char*> allowed) const {
   require_object();
-  for (const auto& [key, _] : m_value.items()) {
+  for (const auto& item : m_value.items()) {
+    const std::string& key = item.key();  // a named variable: clang 14 cannot capture bindings
     if (std::none_of(allowed.begin(), allowed.end(), [&](const char* a) { return key == a; })) {
       std::string list;
       for (const char* a : allowed) list += std::string(list.empty() ? "" : ", ") + a;
