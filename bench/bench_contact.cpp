@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_util.hpp"
 #include "knit/contact/contact_samples.hpp"
 #include "knit/contact/contact_term.hpp"
 
@@ -37,18 +38,8 @@ std::string cpu_model() {
   return "unknown";
 }
 
-// CPU seconds of the whole process (all threads); a shared machine inflates it less than
-// wall time
-double process_cpu_s() {
-  timespec ts{};
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-  return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
-
-double median(std::vector<double> x) {
-  std::sort(x.begin(), x.end());
-  return x[x.size() / 2];
-}
+using knit::bench::median;
+using knit::bench::process_cpu_s;
 
 int arg(int argc, char** argv, int k, int fallback) {
   if (argc <= k) return fallback;

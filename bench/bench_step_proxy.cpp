@@ -96,18 +96,8 @@ std::vector<int> int_list(int argc, char** argv, int k, const std::vector<int>& 
   return out;
 }
 
-// CPU seconds used by the whole process (all threads): unlike wall time, it does not count
-// time spent descheduled on a shared machine
-double process_cpu_s() {
-  timespec ts{};
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-  return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
-
-double median(std::vector<double> x) {
-  std::sort(x.begin(), x.end());
-  return x[x.size() / 2];
-}
+using knit::bench::median;
+using knit::bench::process_cpu_s;
 
 }  // namespace
 

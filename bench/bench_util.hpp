@@ -7,10 +7,12 @@
 
 #include <algorithm>
 #include <chrono>
+#include <ctime>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <thread>
+#include <vector>
 
 namespace knit::bench {
 
@@ -40,6 +42,20 @@ inline int active_threads() {
   return static_cast<int>(std::min<size_t>(
       tbb::this_task_arena::max_concurrency(),
       tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism)));
+}
+
+/// CPU seconds used by the whole process (all threads): unlike wall time, it does not
+/// count time spent descheduled on a shared machine.
+inline double process_cpu_s() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
+/// The median (upper median for an even count).
+inline double median(std::vector<double> x) {
+  std::sort(x.begin(), x.end());
+  return x[x.size() / 2];
 }
 
 inline double now_s() {

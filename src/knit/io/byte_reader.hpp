@@ -57,6 +57,15 @@ class ByteReader {
   size_t m_pos = 0;
 };
 
+/// Appends the bytes of a trivially copyable value (little-endian on our targets) to `out`,
+/// the writing counterpart of ByteReader::get.
+template <class T>
+void put(std::string& out, T value) {
+  char buf[sizeof(T)];
+  std::memcpy(buf, &value, sizeof(T));
+  out.append(buf, sizeof(T));
+}
+
 /// A 4-byte tag shown safely in messages: printable characters as is, others as \xNN.
 inline std::string printable_tag(std::string_view tag) {
   std::string out;

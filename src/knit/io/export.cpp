@@ -1,5 +1,7 @@
 #include "knit/io/export.hpp"
 
+#include "knit/io/byte_reader.hpp"
+
 #include <charconv>
 #include <cmath>
 #include <cstring>
@@ -48,12 +50,7 @@ void append_extent(std::string& out, const Eigen::Matrix3Xd& cp, double radius) 
   out += ']';
 }
 
-template <class T>
-void put(std::string& out, T value) {
-  char buf[sizeof(T)];
-  std::memcpy(buf, &value, sizeof(T));
-  out.append(buf, sizeof(T));
-}
+using detail::put;
 
 }  // namespace
 

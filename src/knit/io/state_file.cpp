@@ -16,12 +16,7 @@ namespace {
 constexpr char MAGIC[8] = {'K', 'N', 'I', 'T', 'S', 'T', 'A', 'T'};
 constexpr char END_MAGIC[4] = {'K', 'E', 'N', 'D'};
 
-template <class T>
-void put(std::string& out, T value) {
-  char buf[sizeof(T)];
-  std::memcpy(buf, &value, sizeof(T));
-  out.append(buf, sizeof(T));
-}
+using detail::put;
 
 }  // namespace
 
