@@ -30,6 +30,7 @@ void relax_imported(Opts& o) {
   knit::Params params = knit::Params::relaxation();
   params.gravity.setZero();
   params.contact_points = o.contact_points;
+  params.k_global = o.damping.k_global;
   if (!o.time_step_given) o.relax.time_step = 1.0 / 25000;
   knit::ModelBuilder builder;
   for (const knit::ImportedYarn& y : knit::import_yarns(o.from, o.import))
@@ -47,9 +48,11 @@ void relax_imported(Opts& o) {
   o.relax.out_dir = o.out;
   o.relax.progress = !o.quiet;
   o.relax.write_frames = !o.no_frames;
-  const knit::RunReport report =
-      knit::relax(sim, state, o.relax,
-                  {{"from", o.from}, {"shrink", o.shrink}, {"contact_points", o.contact_points}});
+  const knit::RunReport report = knit::relax(sim, state, o.relax,
+                                             {{"from", o.from},
+                                              {"shrink", o.shrink},
+                                              {"contact_points", o.contact_points},
+                                              {"k_global", params.k_global}});
   fs::copy_file(fs::path(o.out) / "final.kstate", fs::path(o.out) / "relaxed.kstate",
                 fs::copy_options::overwrite_existing);
   print_report(report, o.out);
@@ -68,6 +71,7 @@ void register_relax(CLI::App& app) {
     int threads = 0;
     int contact_points = 10;
     double shrink = knit::RELAX_SHRINK;
+    knit::Params damping = knit::Params::relaxation();
     bool quiet = false, no_frames = false;
     bool time_step_given = false;
   };
@@ -99,6 +103,15 @@ void register_relax(CLI::App& app) {
       ->check(CLI::Range(1, 64));
   cmd->add_option("--shrink", o->shrink, "rest-length shrink factor c")
       ->check(CLI::Range(0.5, 1.0));
+  cmd->add_option("--k-global", o->damping.k_global,
+                  "global damping k_global (g/s; default 0 for patterns, 1.5 with --from)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--alpha-small", o->damping.alpha_small,
+                  "non-rigid damping of the small regions per step (default 0.3)")
+      ->check(CLI::Range(0.0, 1.0));
+  cmd->add_option("--alpha-large", o->damping.alpha_large,
+                  "non-rigid damping of the large regions per step (default 0.3)")
+      ->check(CLI::Range(0.0, 1.0));
   cmd->add_option(
          "--time-step", o->relax.time_step,
          "s (default 1/11800; 1/25000 with --from: imported swatches start tightly packed)")
@@ -118,6 +131,8 @@ void register_relax(CLI::App& app) {
     if (o->from.empty() == o->pattern.empty())
       throw std::invalid_argument("relax: give either a PATTERN or --from FILE");
     o->time_step_given = cmd->count("--time-step") > 0;
+    if (cmd->count("--k-global") == 0 && o->from.empty())
+      o->damping.k_global = knit::RELAX_K_GLOBAL;
     if (!o->from.empty()) return relax_imported(*o);
     namespace fs = std::filesystem;
     // everything is validated before anything is written
@@ -126,6 +141,9 @@ void register_relax(CLI::App& app) {
     knit::Params params = knit::Params::relaxation();
     params.gravity.setZero();  // the sample relaxes in free space
     params.contact_points = o->contact_points;
+    params.k_global = o->damping.k_global;
+    params.alpha_small = o->damping.alpha_small;
+    params.alpha_large = o->damping.alpha_large;
     const knit::Model model = knit::build_knit_model(knit, params, o->shrink, GLUE_CLOSE_TIME);
     auto control = make_thread_control(o->threads);
 
@@ -151,6 +169,9 @@ void register_relax(CLI::App& app) {
                             {"segments_per_stitch", o->knit.segments_per_stitch},
                             {"shrink", o->shrink},
                             {"contact_points", o->contact_points},
+                            {"k_global", params.k_global},
+                            {"alpha_small", params.alpha_small},
+                            {"alpha_large", params.alpha_large},
                             {"generated",
                              {{"stitch_width_cm", knit.stitch_width_cm},
                               {"row_height_cm", knit.row_height_cm},

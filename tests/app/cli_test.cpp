@@ -93,16 +93,35 @@ TEST(Cli, RelaxSmallSwatchWritesShapeSummaryAndExport) {
   ASSERT_EQ(r.code, 0) << r.output;
   std::ifstream in(out + "/summary.json");
   const auto s = nlohmann::json::parse(in);
-  for (const char* key :
-       {"pattern", "rows", "cols", "course_extent_cm", "wale_extent_cm", "thickness_cm",
-        "stitch_width_cm", "row_height_cm", "loop_length_cm", "edge_curl", "relaxed",
-        "ke_per_length", "ke_per_length_threshold", "min_contact_distance"})
+  for (const char* key : {"pattern", "rows", "cols", "course_extent_cm", "wale_extent_cm",
+                          "thickness_cm", "stitch_width_cm", "row_height_cm", "loop_length_cm",
+                          "edge_curl", "relaxed", "ke_per_length", "ke_per_length_threshold",
+                          "min_contact_distance", "k_global", "alpha_small", "alpha_large"})
     EXPECT_TRUE(s.contains(key)) << key;
+  EXPECT_EQ(s["k_global"].get<double>(), 0.0);  // the relax default (see RELAX_K_GLOBAL)
+  EXPECT_EQ(s["alpha_small"].get<double>(), 0.3);
   EXPECT_EQ(s["rows"], 4);
   EXPECT_EQ(s["cols"], 5);
   EXPECT_GT(s["course_extent_cm"].get<double>(), s["wale_extent_cm"].get<double>() * 0.5);
   for (const char* f : {"/initial.kstate", "/relaxed.kstate", "/final.obj", "/log.csv"})
     EXPECT_TRUE(fs::exists(out + f)) << f;
+}
+
+TEST(Cli, RelaxTakesThePapersGlobalDampingWhenAsked) {
+  const std::string out = temp_dir("cli_relax_damped");
+  const Result r =
+      run("relax garter --rows 3 --cols 3 --max-time 0.002 --quiet --no-frames --k-global 1.5 "
+          "--alpha-large 0.5 --out " +
+          out);
+  ASSERT_EQ(r.code, 0) << r.output;
+  std::ifstream in(out + "/summary.json");
+  const auto s = nlohmann::json::parse(in);
+  EXPECT_EQ(s["k_global"].get<double>(), 1.5);
+  EXPECT_EQ(s["alpha_large"].get<double>(), 0.5);
+  EXPECT_GT(s["stage_seconds"]["global_damping"].get<double>(), 0.0);
+  const Result bad = run("relax garter --alpha-small 2 --out " + out + "_bad");
+  EXPECT_NE(bad.code, 0);
+  EXPECT_NE(bad.output.find("alpha-small"), std::string::npos) << bad.output;
 }
 
 TEST(Cli, RelaxRejectsUnknownPatternAndWritesNothing) {

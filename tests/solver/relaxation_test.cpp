@@ -52,5 +52,48 @@ TEST(Relaxation, SmallStockinetteSettlesWithoutPassingThrough) {
   EXPECT_LT(sim.kinetic_energy(s), 0.2 * peak_ke);
 }
 
+// Without global damping (the `relax` default) only the non-rigid damping filters, contact
+// damping and the projection act on the motion, and each of them only removes energy: once
+// the glues have closed (their moving targets do work), kinetic + potential energy never
+// rises by more than the integrator's error, while the fabric still draws in.
+TEST(Relaxation, WithoutGlobalDampingEnergyOnlyFalls) {
+  KnitOptions ko;
+  ko.rows = 6;
+  ko.cols = 6;
+  const GeneratedKnit knit = generate_knit(load_pattern("rib2x2"), ko);
+  Params p = Params::relaxation();
+  p.gravity.setZero();
+  p.k_global = 0;
+  const double close_time = 0.01;
+  const Model model = build_knit_model(knit, p, RELAX_SHRINK, close_time);
+  Simulator sim(model);
+  sim.add_filter(std::make_unique<NonRigidDampingFilter>(model, p.alpha_small, p.alpha_large));
+  ASSERT_EQ(sim.find_term("global_damping"), nullptr);
+  State s;
+  s.q = Eigen::Map<const Eigen::VectorXd>(knit.control_points.data(), knit.control_points.size());
+  s.v = Eigen::VectorXd::Zero(s.q.size());
+  const FabricShape before = measure_fabric(model, s.q);
+  ASSERT_TRUE(sim.satisfy_constraints(s).converged);
+  const double h = 1.0 / 11800;
+  auto run = [&](int steps) {
+    for (int i = 0; i < steps; ++i) {
+      const StepResult r = sim.step(s, h);
+      ASSERT_TRUE(r.ok()) << "step at t = " << s.time << ": " << r.message;
+    }
+  };
+  run(static_cast<int>(close_time / h) + 10);
+  double last = sim.kinetic_energy(s) + sim.potential_energy(s);
+  const double scale = last;
+  for (int k = 0; k < 12; ++k) {  // to ≈ 0.06 s
+    run(50);
+    const double e = sim.kinetic_energy(s) + sim.potential_energy(s);
+    EXPECT_LE(e, last + 1e-4 * scale) << "energy rose at t = " << s.time;
+    last = e;
+  }
+  const FabricShape after = measure_fabric(model, s.q);
+  EXPECT_LT(after.course_extent_cm, before.course_extent_cm);
+  EXPECT_LT(after.wale_extent_cm, before.wale_extent_cm);
+}
+
 }  // namespace
 }  // namespace knit
