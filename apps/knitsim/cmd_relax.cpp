@@ -1,6 +1,7 @@
 // knitsim relax PATTERN --rows R --cols C --out DIR
 // Builds the interlocked yarn of a knit pattern and relaxes it to rest (MODEL.md §6).
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <memory>
 
@@ -60,11 +61,55 @@ void relax_imported(Opts& o) {
   if (report.status != knit::StepStatus::OK) throw RunFailed();
 }
 
+knit::State generated_state(const knit::GeneratedKnit& knit) {
+  knit::State state;
+  state.q =
+      Eigen::Map<const Eigen::VectorXd>(knit.control_points.data(), knit.control_points.size());
+  state.v = Eigen::VectorXd::Zero(state.q.size());
+  return state;
+}
+
+// The state of an earlier relaxation of the same knit: same control point count and the
+// same stitch of every segment, or an error naming the file and what differs.
+knit::State resumed_state(const std::string& path, const knit::GeneratedKnit& knit,
+                          const std::string& pattern) {
+  namespace fs = std::filesystem;
+  // the run that wrote the file names its pattern in its summary (DIR/ or DIR/frames/)
+  for (const fs::path dir :
+       {fs::path(path).parent_path(), fs::path(path).parent_path().parent_path()}) {
+    std::ifstream in(dir / "summary.json");
+    if (!in) continue;
+    const nlohmann::json s = nlohmann::json::parse(in, nullptr, false);
+    if (s.is_object() && s.contains("pattern") && s["pattern"].is_string() &&
+        s["pattern"].get<std::string>() != pattern)
+      throw std::invalid_argument("--resume " + path + ": it was relaxed from pattern " +
+                                  s["pattern"].get<std::string>() + " (" +
+                                  (dir / "summary.json").string() + "), not " + pattern);
+    break;
+  }
+  const knit::StateFile f = knit::read_state_file(path);
+  const int expected = static_cast<int>(knit.control_points.cols());
+  if (f.yarn_cp_counts.size() != 1 || f.num_cp() != expected)
+    throw std::invalid_argument("--resume " + path + ": it holds " +
+                                std::to_string(f.yarn_cp_counts.size()) + " yarn(s) and " +
+                                std::to_string(f.num_cp()) + " control points, but " + pattern +
+                                " at this size has 1 yarn and " + std::to_string(expected) +
+                                " (give the --rows, --cols and options of the first run)");
+  for (size_t i = 0; i < f.stitch.size(); ++i)
+    if (f.stitch[i].row != knit.stitch[i].row || f.stitch[i].col != knit.stitch[i].col)
+      throw std::invalid_argument("--resume " + path + ": segment " + std::to_string(i) +
+                                  " belongs to stitch (" + std::to_string(f.stitch[i].row) + ", " +
+                                  std::to_string(f.stitch[i].col) + "), but to (" +
+                                  std::to_string(knit.stitch[i].row) + ", " +
+                                  std::to_string(knit.stitch[i].col) + ") in " + pattern);
+  return f.state;
+}
+
 }  // namespace
 
 void register_relax(CLI::App& app) {
   struct Opts {
-    std::string pattern, out, from, export_format;
+    std::string pattern, out, from, resume, export_format;
     knit::ImportOptions import;
     knit::KnitOptions knit;
     knit::RelaxOptions relax;
@@ -85,6 +130,10 @@ void register_relax(CLI::App& app) {
                   "reverse_stockinette) or a chart file (k/p per stitch, last line = row 0)");
   cmd->add_option("--from", o->from,
                   "relax yarns imported from a .yarns, .bcc or .obj file instead of a pattern");
+  cmd->add_option("--resume", o->resume,
+                  "go on relaxing from a state written by an earlier `relax` of the same "
+                  "pattern and size (its relaxed.kstate or a frame); --max-time is then added")
+      ->check(CLI::ExistingFile);
   cmd->add_option(
          "--scale", o->import.scale,
          "with --from: multiply coordinates (default: the file's yarn radius becomes 0.125 cm)")
@@ -144,13 +193,11 @@ void register_relax(CLI::App& app) {
     params.k_global = o->damping.k_global;
     params.alpha_small = o->damping.alpha_small;
     params.alpha_large = o->damping.alpha_large;
+    // a resumed state carries its time, so its glues go on closing where they were
     const knit::Model model = knit::build_knit_model(knit, params, o->shrink, GLUE_CLOSE_TIME);
+    knit::State state =
+        o->resume.empty() ? generated_state(knit) : resumed_state(o->resume, knit, o->pattern);
     auto control = make_thread_control(o->threads);
-
-    knit::State state;
-    state.q =
-        Eigen::Map<const Eigen::VectorXd>(knit.control_points.data(), knit.control_points.size());
-    state.v = Eigen::VectorXd::Zero(state.q.size());
     fs::create_directories(o->out);
     knit::write_state_file((fs::path(o->out) / "initial.kstate").string(),
                            knit::make_state_file(model, state));
@@ -169,6 +216,7 @@ void register_relax(CLI::App& app) {
                             {"segments_per_stitch", o->knit.segments_per_stitch},
                             {"shrink", o->shrink},
                             {"contact_points", o->contact_points},
+                            {"resumed_from", o->resume},
                             {"k_global", params.k_global},
                             {"alpha_small", params.alpha_small},
                             {"alpha_large", params.alpha_large},

@@ -8,6 +8,8 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "knit/io/state_file.hpp"
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -122,6 +124,33 @@ TEST(Cli, RelaxTakesThePapersGlobalDampingWhenAsked) {
   const Result bad = run("relax garter --alpha-small 2 --out " + out + "_bad");
   EXPECT_NE(bad.code, 0);
   EXPECT_NE(bad.output.find("alpha-small"), std::string::npos) << bad.output;
+}
+
+// A relaxation stopped and resumed (--resume) follows the same path as one that ran on:
+// the state file holds positions, velocities and time, and the glues go on closing.
+TEST(Cli, ResumedRelaxationContinuesTheSamePath) {
+  const std::string dir = temp_dir("cli_resume");
+  const std::string opts = " --rows 3 --cols 4 --quiet --no-frames --threads 1";
+  ASSERT_EQ(run("relax garter" + opts + " --max-time 0.03 --out " + dir + "/whole").code, 0);
+  ASSERT_EQ(run("relax garter" + opts + " --max-time 0.01 --out " + dir + "/first").code, 0);
+  const Result r = run("relax garter" + opts + " --max-time 0.02 --resume " + dir +
+                       "/first/relaxed.kstate --out " + dir + "/second");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const knit::StateFile whole = knit::read_state_file(dir + "/whole/relaxed.kstate");
+  const knit::StateFile resumed = knit::read_state_file(dir + "/second/relaxed.kstate");
+  EXPECT_NEAR(resumed.state.time, whole.state.time, 1e-9);
+  EXPECT_LT((resumed.state.q - whole.state.q).cwiseAbs().maxCoeff(), 1e-9);
+
+  // a state of another pattern or size is refused, naming what differs
+  const Result other =
+      run("relax rib2x2" + opts + " --resume " + dir + "/first/relaxed.kstate --out " + dir + "/x");
+  EXPECT_EQ(other.code, 1);
+  EXPECT_NE(other.output.find("relaxed from pattern garter"), std::string::npos) << other.output;
+  const Result size = run("relax garter --rows 4 --cols 4 --resume " + dir +
+                          "/first/relaxed.kstate --out " + dir + "/y");
+  EXPECT_EQ(size.code, 1);
+  EXPECT_NE(size.output.find("control points"), std::string::npos) << size.output;
+  EXPECT_FALSE(fs::exists(dir + "/y"));
 }
 
 TEST(Cli, RelaxRejectsUnknownPatternAndWritesNothing) {
