@@ -40,6 +40,22 @@ TEST(FabricShape, FlatSheetHasKnownSpacingAndNoCurl) {
   EXPECT_NEAR(s.edge_curl, 0.0, 1e-9);
 }
 
+// An accordion folded at every column boundary (as a 1×1 rib draws in): the yarn path per
+// stitch keeps its length w, but the gauge, measured along the course on the fabric laid
+// flat, is w cos θ.
+TEST(FabricShape, PleatedSheetMeasuresItsProjectedGauge) {
+  const double w = 0.5, theta = 0.6;
+  Eigen::VectorXd q;
+  const Model m = grid(10, 12, w, 0.4, q, [&](Eigen::Vector3d p) {
+    const double u = p.x() / w, tri = std::abs(u - 2 * std::floor(0.5 * u + 0.5));  // 0…1
+    return Eigen::Vector3d(p.x() * std::cos(theta), p.y(), tri * w * std::sin(theta));
+  });
+  const FabricShape s = measure_fabric(m, q);
+  EXPECT_NEAR(s.stitch_width_cm, w * std::cos(theta), 1e-9);
+  EXPECT_NEAR(s.row_height_cm, 0.4, 1e-9);
+  EXPECT_GT(s.thickness_cm, 2 * m.params.radius + 0.5 * w * std::sin(theta));
+}
+
 TEST(FabricShape, MeasuresAreRotationInvariant) {
   const Eigen::Matrix3d rot =
       Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();

@@ -67,16 +67,8 @@ FabricShape measure_fabric(const Model& model, const Eigen::VectorXd& q) {
       if (!has(r, c)) continue;
       const Eigen::Vector3d d = centroid(r, c) - mean;
       cov += d * d.transpose();
-      if (has(r, c + 1) && c + 1 <= c1) {
-        course += centroid(r, c + 1) - centroid(r, c);
-        sw += (centroid(r, c + 1) - centroid(r, c)).norm();
-        ++nsw;
-      }
-      if (has(r + 1, c) && r + 1 <= r1) {
-        wale += centroid(r + 1, c) - centroid(r, c);
-        rh += (centroid(r + 1, c) - centroid(r, c)).norm();
-        ++nrh;
-      }
+      if (has(r, c + 1) && c + 1 <= c1) course += centroid(r, c + 1) - centroid(r, c);
+      if (has(r + 1, c) && r + 1 <= r1) wale += centroid(r + 1, c) - centroid(r, c);
     }
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
   Eigen::Vector3d normal = eig.eigenvectors().col(0);
@@ -88,6 +80,20 @@ FabricShape measure_fabric(const Model& model, const Eigen::VectorXd& q) {
   s.course_axis = course;
   s.wale_axis = wale;
   s.normal = normal;
+  // spacing projected on the axes, as a knitter measures gauge on the fabric laid flat:
+  // ribs that pleat or rows that stack out of the plane count as drawn in
+  for (int r = r0; r <= r1; ++r)
+    for (int c = c0; c <= c1; ++c) {
+      if (!has(r, c)) continue;
+      if (has(r, c + 1) && c + 1 <= c1) {
+        sw += std::abs((centroid(r, c + 1) - centroid(r, c)).dot(course));
+        ++nsw;
+      }
+      if (has(r + 1, c) && r + 1 <= r1) {
+        rh += std::abs((centroid(r + 1, c) - centroid(r, c)).dot(wale));
+        ++nrh;
+      }
+    }
   s.stitch_width_cm = nsw ? sw / nsw : 0;
   s.row_height_cm = nrh ? rh / nrh : 0;
 

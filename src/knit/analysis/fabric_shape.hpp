@@ -19,9 +19,11 @@ struct FabricShape {
   double course_extent_cm = 0;  ///< extent of the yarn along the course axis (width)
   double wale_extent_cm = 0;    ///< extent along the wale axis (height)
   double thickness_cm = 0;      ///< extent along the normal over the central half, + 2r
-  double stitch_width_cm = 0;   ///< mean centroid spacing of adjacent columns, central half
-  double row_height_cm = 0;     ///< mean centroid spacing of adjacent rows, central half
-  double loop_length_cm = 0;    ///< rest yarn length per stitch
+  /// mean spacing of adjacent columns' stitch centroids along the course axis, central
+  /// half (the gauge: a pleated rib or a wavy sheet measures narrower than its yarn path)
+  double stitch_width_cm = 0;
+  double row_height_cm = 0;   ///< the same for adjacent rows along the wale axis
+  double loop_length_cm = 0;  ///< rest yarn length per stitch
   /// Signed mean offset (cm) of each edge's stitch centroids from the central plane,
   /// positive toward the front: left (column 0), right, bottom (row 0), top.
   double edge_offset_cm[4] = {0, 0, 0, 0};
