@@ -201,7 +201,7 @@ void register_relax(CLI::App& app) {
     fs::create_directories(o->out);
     knit::write_state_file((fs::path(o->out) / "initial.kstate").string(),
                            knit::make_state_file(model, state));
-    const knit::FabricShape initial = knit::measure_fabric(model, state.q);
+    const knit::FabricShape initial = knit::measure_fabric(model, generated_state(knit).q);
 
     knit::Simulator sim(model);
     sim.add_filter(std::make_unique<knit::NonRigidDampingFilter>(model, params.alpha_small,
@@ -241,8 +241,9 @@ void register_relax(CLI::App& app) {
     std::cout << "relaxed " << o->pattern << " " << o->knit.rows << "x" << o->knit.cols << ": "
               << (s["relaxed"].get<bool>() ? "at rest" : "time limit reached before rest")
               << "; course " << s["course_extent_cm"].get<double>() << " cm, wale "
-              << s["wale_extent_cm"].get<double>() << " cm, edge curl "
-              << s["edge_curl"].get<double>() << "\n";
+              << s["wale_extent_cm"].get<double>() << " cm (along the fabric "
+              << s["course_length_cm"].get<double>() << " × " << s["wale_length_cm"].get<double>()
+              << " cm), edge curl " << s["edge_curl"].get<double>() << "\n";
     if (report.status != knit::StepStatus::OK) throw RunFailed();
   });
 }

@@ -36,6 +36,8 @@ TEST(FabricShape, FlatSheetHasKnownSpacingAndNoCurl) {
   EXPECT_NEAR(s.row_height_cm, 0.4, 1e-9);
   EXPECT_NEAR(s.course_extent_cm, 10 * 0.5, 1e-9);
   EXPECT_NEAR(s.wale_extent_cm, 11 * 0.4, 1e-6);
+  EXPECT_NEAR(s.course_length_cm, 10 * 0.5, 1e-9);
+  EXPECT_NEAR(s.wale_length_cm, 12 * 0.4, 1e-9);
   EXPECT_NEAR(s.thickness_cm, 2 * m.params.radius, 1e-9);
   EXPECT_NEAR(s.edge_curl, 0.0, 1e-9);
 }
@@ -53,6 +55,7 @@ TEST(FabricShape, PleatedSheetMeasuresItsProjectedGauge) {
   const FabricShape s = measure_fabric(m, q);
   EXPECT_NEAR(s.stitch_width_cm, w * std::cos(theta), 1e-9);
   EXPECT_NEAR(s.row_height_cm, 0.4, 1e-9);
+  EXPECT_NEAR(s.course_length_cm, 12 * w * std::cos(theta), 0.05 * w);
   EXPECT_GT(s.thickness_cm, 2 * m.params.radius + 0.5 * w * std::sin(theta));
 }
 
@@ -100,6 +103,11 @@ TEST(FabricShape, RolledSideEdgesShowAsCurl) {
   // the bottom edge is straight; only its two rolled corners pull its mean offset back
   EXPECT_LT(std::abs(s.edge_offset_cm[2]), 0.5 * std::abs(s.edge_offset_cm[0]));
   EXPECT_LT(s.course_extent_cm, f.course_extent_cm - 0.5);
+  // measured along the fabric, the rolled sheet is nearly as wide as the flat one: chords
+  // over 4 stitches cut across this tight roll (circumference 2.5 cm), but never exceed it
+  EXPECT_LE(s.course_length_cm, f.course_length_cm + 1e-9);
+  EXPECT_GT(s.course_length_cm, 0.85 * f.course_length_cm);
+  EXPECT_GT(s.course_length_cm, s.course_extent_cm + 0.5);
 }
 
 TEST(FabricShape, RejectsModelsWithoutStitches) {

@@ -80,22 +80,54 @@ FabricShape measure_fabric(const Model& model, const Eigen::VectorXd& q) {
   s.course_axis = course;
   s.wale_axis = wale;
   s.normal = normal;
-  // spacing projected on the axes, as a knitter measures gauge on the fabric laid flat:
-  // ribs that pleat or rows that stack out of the plane count as drawn in
+  // The gauge: distance between stitch centres GAUGE_SPAN columns (rows) apart, per
+  // stitch. The span covers a whole 2×2 rib repeat, so ribs that pleat measure drawn in,
+  // and is short enough to follow a sheet that rolls.
+  const int span_c = std::min(GAUGE_SPAN, c1 - c0), span_r = std::min(GAUGE_SPAN, r1 - r0);
   for (int r = r0; r <= r1; ++r)
     for (int c = c0; c <= c1; ++c) {
       if (!has(r, c)) continue;
-      if (has(r, c + 1) && c + 1 <= c1) {
-        sw += std::abs((centroid(r, c + 1) - centroid(r, c)).dot(course));
+      if (c + span_c <= c1 && has(r, c + span_c)) {
+        sw += (centroid(r, c + span_c) - centroid(r, c)).norm() / span_c;
         ++nsw;
       }
-      if (has(r + 1, c) && r + 1 <= r1) {
-        rh += std::abs((centroid(r + 1, c) - centroid(r, c)).dot(wale));
+      if (r + span_r <= r1 && has(r + span_r, c)) {
+        rh += (centroid(r + span_r, c) - centroid(r, c)).norm() / span_r;
         ++nrh;
       }
     }
   s.stitch_width_cm = nsw ? sw / nsw : 0;
   s.row_height_cm = nrh ? rh / nrh : 0;
+
+  // the piece's size measured along the fabric at the same span (a tape measure laid over
+  // a rolled edge), over the central rows (columns), plus half a stitch at either end
+  auto along = [&](bool course_dir, int line, int span) {
+    const int n = course_dir ? C : R;
+    double len = 0;
+    int prev = 0;
+    for (int k = span; prev < n - 1; k += span) {
+      const int next = std::min(k, n - 1);
+      const int ra = course_dir ? line : prev, ca = course_dir ? prev : line;
+      const int rb = course_dir ? line : next, cb = course_dir ? next : line;
+      if (!has(ra, ca) || !has(rb, cb)) return -1.0;
+      len += (centroid(rb, cb) - centroid(ra, ca)).norm();
+      prev = next;
+    }
+    return len;
+  };
+  auto mean_along = [&](bool course_dir) {
+    double acc = 0;
+    int m = 0;
+    for (int line = course_dir ? r0 : c0; line <= (course_dir ? r1 : c1); ++line) {
+      const double len = along(course_dir, line, course_dir ? span_c : span_r);
+      if (len < 0) continue;
+      acc += len;
+      ++m;
+    }
+    return m ? acc / m : 0.0;
+  };
+  s.course_length_cm = mean_along(true) + s.stitch_width_cm;
+  s.wale_length_cm = mean_along(false) + s.row_height_cm;
 
   double cmin = std::numeric_limits<double>::infinity(), cmax = -cmin, wmin = cmin, wmax = -cmin,
          nmin = cmin, nmax = -cmin;
@@ -141,6 +173,8 @@ FabricShape measure_fabric(const Model& model, const Eigen::VectorXd& q) {
 nlohmann::json to_json(const FabricShape& s) {
   return {{"course_extent_cm", s.course_extent_cm},
           {"wale_extent_cm", s.wale_extent_cm},
+          {"course_length_cm", s.course_length_cm},
+          {"wale_length_cm", s.wale_length_cm},
           {"thickness_cm", s.thickness_cm},
           {"stitch_width_cm", s.stitch_width_cm},
           {"row_height_cm", s.row_height_cm},

@@ -14,15 +14,24 @@
 
 namespace knit {
 
+/// Columns (rows) between the stitch centres the gauge is measured over.
+inline constexpr int GAUGE_SPAN = 4;
+
 struct FabricShape {
   int rows = 0, cols = 0;
   double course_extent_cm = 0;  ///< extent of the yarn along the course axis (width)
   double wale_extent_cm = 0;    ///< extent along the wale axis (height)
   double thickness_cm = 0;      ///< extent along the normal over the central half, + 2r
-  /// mean spacing of adjacent columns' stitch centroids along the course axis, central
-  /// half (the gauge: a pleated rib or a wavy sheet measures narrower than its yarn path)
+  /// The gauge on the central half: mean distance between stitch centres GAUGE_SPAN
+  /// columns apart, per stitch. The span holds a whole 2×2 rib repeat, so a rib that
+  /// pleats measures drawn in, and is short enough to follow a sheet that rolls.
   double stitch_width_cm = 0;
-  double row_height_cm = 0;   ///< the same for adjacent rows along the wale axis
+  double row_height_cm = 0;  ///< the same along the wale (rows GAUGE_SPAN apart)
+  /// Width measured along the fabric through stitch centres GAUGE_SPAN columns apart (a
+  /// tape measure laid over rolled edges, not into pleats), mean of the central rows,
+  /// plus one stitch width for the half stitches at either end.
+  double course_length_cm = 0;
+  double wale_length_cm = 0;  ///< the same along the wale, central columns
   double loop_length_cm = 0;  ///< rest yarn length per stitch
   /// Signed mean offset (cm) of each edge's stitch centroids from the central plane,
   /// positive toward the front: left (column 0), right, bottom (row 0), top.
