@@ -13,21 +13,36 @@
 namespace knit {
 namespace {
 
-TEST(Relaxation, SmallStockinetteSettlesWithoutPassingThrough) {
-  KnitOptions ko;
-  ko.rows = 6;
-  ko.cols = 6;
-  const GeneratedKnit knit = generate_knit(load_pattern("stockinette"), ko);
-  Params p = Params::relaxation();
-  p.gravity.setZero();
-  const double close_time = 0.02;
-  const Model model = build_knit_model(knit, p, RELAX_SHRINK, close_time);
-  Simulator sim(model);
-  sim.add_filter(std::make_unique<NonRigidDampingFilter>(model, p.alpha_small, p.alpha_large));
+// A 6×6 swatch of `pattern` set up for relaxation in zero gravity with the non-rigid
+// damping filters, its glues closing over `close_time`.
+struct Swatch {
+  Swatch(const char* pattern, double k_global, double close_time) {
+    KnitOptions ko;
+    ko.rows = 6;
+    ko.cols = 6;
+    const GeneratedKnit knit = generate_knit(load_pattern(pattern), ko);
+    Params p = Params::relaxation();
+    p.gravity.setZero();
+    p.k_global = k_global;
+    sim = std::make_unique<Simulator>(build_knit_model(knit, p, RELAX_SHRINK, close_time));
+    sim->add_filter(
+        std::make_unique<NonRigidDampingFilter>(sim->model(), p.alpha_small, p.alpha_large));
+    s.q = Eigen::Map<const Eigen::VectorXd>(knit.control_points.data(), knit.control_points.size());
+    s.v = Eigen::VectorXd::Zero(s.q.size());
+    before = measure_fabric(sim->model(), s.q);
+  }
+  std::unique_ptr<Simulator> sim;
   State s;
-  s.q = Eigen::Map<const Eigen::VectorXd>(knit.control_points.data(), knit.control_points.size());
-  s.v = Eigen::VectorXd::Zero(s.q.size());
-  const FabricShape before = measure_fabric(model, s.q);
+  FabricShape before;
+};
+
+TEST(Relaxation, SmallStockinetteSettlesWithoutPassingThrough) {
+  const double close_time = 0.02;
+  Swatch sw("stockinette", Params::relaxation().k_global, close_time);
+  Simulator& sim = *sw.sim;
+  const Model& model = sim.model();
+  State& s = sw.s;
+  const FabricShape& before = sw.before;
   ASSERT_TRUE(sim.satisfy_constraints(s).converged);
 
   const auto* contact = dynamic_cast<const ContactTerm*>(sim.find_term("contact"));
@@ -57,22 +72,11 @@ TEST(Relaxation, SmallStockinetteSettlesWithoutPassingThrough) {
 // the glues have closed (their moving targets do work), kinetic + potential energy never
 // rises by more than the integrator's error, while the fabric still draws in.
 TEST(Relaxation, WithoutGlobalDampingEnergyOnlyFalls) {
-  KnitOptions ko;
-  ko.rows = 6;
-  ko.cols = 6;
-  const GeneratedKnit knit = generate_knit(load_pattern("rib2x2"), ko);
-  Params p = Params::relaxation();
-  p.gravity.setZero();
-  p.k_global = 0;
   const double close_time = 0.01;
-  const Model model = build_knit_model(knit, p, RELAX_SHRINK, close_time);
-  Simulator sim(model);
-  sim.add_filter(std::make_unique<NonRigidDampingFilter>(model, p.alpha_small, p.alpha_large));
+  Swatch sw("rib2x2", 0.0, close_time);
+  Simulator& sim = *sw.sim;
+  State& s = sw.s;
   ASSERT_EQ(sim.find_term("global_damping"), nullptr);
-  State s;
-  s.q = Eigen::Map<const Eigen::VectorXd>(knit.control_points.data(), knit.control_points.size());
-  s.v = Eigen::VectorXd::Zero(s.q.size());
-  const FabricShape before = measure_fabric(model, s.q);
   ASSERT_TRUE(sim.satisfy_constraints(s).converged);
   const double h = 1.0 / 11800;
   auto run = [&](int steps) {
@@ -90,9 +94,9 @@ TEST(Relaxation, WithoutGlobalDampingEnergyOnlyFalls) {
     EXPECT_LE(e, last + 1e-4 * scale) << "energy rose at t = " << s.time;
     last = e;
   }
-  const FabricShape after = measure_fabric(model, s.q);
-  EXPECT_LT(after.course_extent_cm, before.course_extent_cm);
-  EXPECT_LT(after.wale_extent_cm, before.wale_extent_cm);
+  const FabricShape after = measure_fabric(sim.model(), s.q);
+  EXPECT_LT(after.course_extent_cm, sw.before.course_extent_cm);
+  EXPECT_LT(after.wale_extent_cm, sw.before.wale_extent_cm);
 }
 
 }  // namespace
