@@ -153,7 +153,7 @@ void register_relax(CLI::App& app) {
   cmd->add_option("--shrink", o->shrink, "rest-length shrink factor c")
       ->check(CLI::Range(0.5, 1.0));
   cmd->add_option("--k-global", o->damping.k_global,
-                  "global damping k_global (g/s; default 0 for patterns, 1.5 with --from)")
+                  "global damping k_global (g/s; default 0.15 for patterns, 1.5 with --from)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--alpha-small", o->damping.alpha_small,
                   "non-rigid damping of the small regions per step (default 0.3)")

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "knit/io/state_file.hpp"
+#include "knit/solver/relaxation.hpp"
 
 namespace {
 
@@ -100,7 +101,7 @@ TEST(Cli, RelaxSmallSwatchWritesShapeSummaryAndExport) {
                           "edge_curl", "relaxed", "ke_per_length", "ke_per_length_threshold",
                           "min_contact_distance", "k_global", "alpha_small", "alpha_large"})
     EXPECT_TRUE(s.contains(key)) << key;
-  EXPECT_EQ(s["k_global"].get<double>(), 0.0);  // the relax default (see RELAX_K_GLOBAL)
+  EXPECT_EQ(s["k_global"].get<double>(), knit::RELAX_K_GLOBAL);
   EXPECT_EQ(s["alpha_small"].get<double>(), 0.3);
   EXPECT_EQ(s["rows"], 4);
   EXPECT_EQ(s["cols"], 5);
