@@ -204,8 +204,8 @@ void register_relax(CLI::App& app) {
     const knit::FabricShape initial = knit::measure_fabric(model, generated_state(knit).q);
 
     knit::Simulator sim(model);
-    sim.add_filter(std::make_unique<knit::NonRigidDampingFilter>(model, params.alpha_small,
-                                                                 params.alpha_large));
+    sim.add_filter(std::make_unique<knit::NonRigidDampingFilter>(
+        model, params.alpha_small, params.alpha_large, o->knit.in_the_round));
     o->relax.out_dir = o->out;
     o->relax.progress = !o->quiet;
     o->relax.write_frames = !o->no_frames;

@@ -197,6 +197,23 @@ TEST(Filter, RegionsFromStitchCoordinates) {
   for (const auto& r : large)
     for (int i : r) ++count[i];
   for (int i = 0; i < m.num_seg(); ++i) EXPECT_EQ(count[i], 4) << "segment " << i;
+  // around a tube the blocks wrap past the seam: 3 block columns (not 4), each whole, and
+  // still 2 × 2 blocks on every stitch; a block at the seam joins the last and first columns
+  const RegionList wrapped = large_stitch_regions(m, 4, 2, true);
+  EXPECT_EQ(wrapped.size(), 12u);
+  count.assign(m.num_seg(), 0);
+  bool seam = false;
+  for (const auto& r : wrapped) {
+    bool first = false, last = false;
+    for (int i : r) {
+      ++count[i];
+      first |= m.stitch[i].col == 0;
+      last |= m.stitch[i].col == 5;
+    }
+    seam |= first && last;
+  }
+  for (int i = 0; i < m.num_seg(); ++i) EXPECT_EQ(count[i], 4) << "segment " << i;
+  EXPECT_TRUE(seam);
 }
 
 TEST(Filter, SegmentsWithoutStitchesAreUntouched) {

@@ -27,7 +27,7 @@ RegionList small_stitch_regions(const Model& model) {
   return regions;
 }
 
-RegionList large_stitch_regions(const Model& model, int block, int stride) {
+RegionList large_stitch_regions(const Model& model, int block, int stride, bool wrap_columns) {
   if (block < 1 || stride < 1)
     throw std::invalid_argument("large regions need block >= 1 and stride >= 1");
   int rows = 0, cols = 0;
@@ -35,13 +35,18 @@ RegionList large_stitch_regions(const Model& model, int block, int stride) {
     if (s.row >= 0) rows = std::max(rows, s.row + 1), cols = std::max(cols, s.col + 1);
   RegionList regions;
   const int first = -(block - stride) / stride * stride;
+  // around a tube every block is whole: its columns run on past the last into the first
+  const int col_first = wrap_columns ? 0 : first;
+  auto in_columns = [&](int col, int c0) {
+    if (!wrap_columns) return col >= std::max(c0, 0) && col < c0 + block;
+    return ((col - c0) % cols + cols) % cols < std::min(block, cols);
+  };
   for (int r0 = first; r0 < rows; r0 += stride)
-    for (int c0 = first; c0 < cols; c0 += stride) {
+    for (int c0 = col_first; c0 < cols; c0 += stride) {
       std::vector<int> region;
       for (int i = 0; i < model.num_seg(); ++i) {
         const StitchCoord& s = model.stitch[i];
-        if (s.row >= std::max(r0, 0) && s.row < r0 + block && s.col >= std::max(c0, 0) &&
-            s.col < c0 + block)
+        if (s.row >= std::max(r0, 0) && s.row < r0 + block && in_columns(s.col, c0))
           region.push_back(i);
       }
       if (!region.empty()) regions.push_back(std::move(region));
@@ -184,10 +189,12 @@ RegionList without_unplaced(const Model& model, RegionList regions) {
 }  // namespace
 
 NonRigidDampingFilter::NonRigidDampingFilter(const Model& model, double alpha_small,
-                                             double alpha_large, int samples_per_segment)
+                                             double alpha_large, bool wrap_columns,
+                                             int samples_per_segment)
     : m_samples(model, samples_per_segment) {
   m_passes.emplace_back(model, without_unplaced(model, small_stitch_regions(model)), alpha_small);
-  m_passes.emplace_back(model, without_unplaced(model, large_stitch_regions(model)), alpha_large);
+  m_passes.emplace_back(
+      model, without_unplaced(model, large_stitch_regions(model, 4, 2, wrap_columns)), alpha_large);
 }
 
 NonRigidDampingFilter::NonRigidDampingFilter(const Model& model, RegionList regions, double alpha,

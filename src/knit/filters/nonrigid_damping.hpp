@@ -18,7 +18,8 @@
 //    the wale; side by side they are joined by the yarn itself and by the large regions.
 //    Strength α_small.
 //  - large: blocks of 4 × 4 stitches starting every 2 rows and 2 columns (from −2, clipped
-//    to the fabric), so that every stitch lies in 2 × 2 of them. Strength α_large.
+//    to the fabric; around a tube they wrap past the seam), so that every stitch lies in
+//    2 × 2 of them. Strength α_large.
 // The small pass runs first, then the large one on the velocities it left.
 #include <Eigen/Core>
 #include <string_view>
@@ -34,8 +35,11 @@ using RegionList = std::vector<std::vector<int>>;
 
 /// One small region per stitch: segments of (r, c) and (r − 1, c).
 RegionList small_stitch_regions(const Model& model);
-/// Blocks of `block` × `block` stitches starting every `stride` rows and columns.
-RegionList large_stitch_regions(const Model& model, int block = 4, int stride = 2);
+/// Blocks of `block` × `block` stitches starting every `stride` rows and columns. With
+/// `wrap_columns` (a tube knitted in the round) the blocks run on around the seam from
+/// the last column into the first, so the seam is damped like any other column.
+RegionList large_stitch_regions(const Model& model, int block = 4, int stride = 2,
+                                bool wrap_columns = false);
 
 /// One pass: the regions, their strength α ∈ [0, 1] and the segment → regions map.
 class RigidRegionPass {
@@ -70,9 +74,10 @@ class RigidRegionPass {
 
 class NonRigidDampingFilter : public VelocityFilter {
  public:
-  /// The two passes of MODEL.md §4 from the model's stitch coordinates.
+  /// The two passes of MODEL.md §4 from the model's stitch coordinates; `wrap_columns`
+  /// for a tube (see large_stitch_regions).
   NonRigidDampingFilter(const Model& model, double alpha_small, double alpha_large,
-                        int samples_per_segment = 8);
+                        bool wrap_columns = false, int samples_per_segment = 8);
   /// A single pass over explicit regions (lists of segment indices).
   NonRigidDampingFilter(const Model& model, RegionList regions, double alpha,
                         int samples_per_segment = 8);
