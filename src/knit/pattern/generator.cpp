@@ -43,12 +43,15 @@ constexpr double UNIT_DEPTH = 2.8;     // z separation D of yarns where they cro
 // t ≈ 1.35 and 1.8 would be too short for 8 segments per stitch to follow), and each
 // crossing fixes the other yarn's depth:
 //   legs ℓ(r,c),  head(r,c) = ℓ(r+1,c) − σ(r+1,c) D,  foot(r,c) = ℓ(r−1,c) − σ(r,c) D,
-// σ = +1 knit, −1 purl (from the front). ℓ = 0 in rows that are all knit or all purl
-// (stockinette, garter); where a row changes between knit and purl (ribs, seed) ℓ = 0.6 σ D,
-// so that the sinker crossing from one face to the other between two columns stays clear
-// of the legs beside it. Between these depths z follows cos²t (Crane's −d cos 2t when head
-// and foot lie at the same depth).
-constexpr double LEG_OFFSET = 0.6;  // ℓ / D where a row changes between knit and purl
+// σ = +1 knit, −1 purl (from the front). Where the row above changes between knit and purl
+// (ribs, seed, a tube's seam), the sinker between two of its columns crosses from one face
+// to the other between the legs of this row's loops: its two ends lie at ℓ(r,c) − σ(r+1,c) D
+// and ℓ(r,c+1) − σ(r+1,c+1) D, so ℓ(r,c) = 0.6 σ(r+1,c) D narrows that swing from 2D to
+// 0.8D. Otherwise (stockinette, garter) ℓ = 0. Taking the offset from the stitch above, not
+// from the stitch itself, matters where a column changes too (seed): from its own stitch
+// the swing would widen to 3.2D and the sinker would pass through the legs. Between these
+// depths z follows cos²t (Crane's −d cos 2t when head and foot lie at the same depth).
+constexpr double LEG_OFFSET = 0.6;  // ℓ / σ(r+1) D where the row above changes kind
 constexpr double SINK_BLEND = 0.5;  // half width (in t) of a sinker's change of depth
 // segments of the next piece fitted along with each piece (see generate_knit)
 constexpr int LOOKAHEAD_SEGMENTS = 3;
@@ -111,16 +114,22 @@ class Layout {
     row = std::clamp(row, 0, m_opt.rows - 1);
     return m_pattern.is_knit(row, col) ? 1 : -1;
   }
-  // depth of the legs of (row, col)
-  double legs(int row, int col) const {
+  // whether the sinkers on either side of (row, col) lead to a stitch of the other kind
+  bool mixed(int row, int col) const {
     row = std::clamp(row, 0, m_opt.rows - 1);
-    const int s = sigma(row, col);
-    bool mixed = false;
     for (int dc : {-1, 1}) {
       const auto [nr, nc] = neighbour(row, col, dc);
-      if (sigma(nr, nc) != s) mixed = true;
+      if (sigma(nr, nc) != sigma(row, col)) return true;
     }
-    return mixed ? LEG_OFFSET * s * m_dims.depth : 0.0;
+    return false;
+  }
+  // depth of the legs of (row, col): offset towards the face the stitch above is pulled
+  // through to when that stitch's row changes kind beside it, because the feet of the row
+  // above cross these legs (see the z profile)
+  double legs(int row, int col) const {
+    const int above = std::clamp(row + 1, 0, m_opt.rows - 1);
+    if (!mixed(above, col)) return 0.0;
+    return LEG_OFFSET * sigma(above, col) * m_dims.depth;
   }
   double head(int row, int col) const {
     return legs(row + 1, col) - sigma(row + 1, col) * m_dims.depth;
@@ -134,8 +143,9 @@ class Layout {
     const int c = col + dc;
     if (c >= 0 && c < m_opt.cols) return {row, c};
     if (!m_opt.in_the_round) return {row, col};
-    if (c < 0) return row > 0 ? std::make_pair(row - 1, m_opt.cols - 1) : std::make_pair(row, col);
-    return row + 1 < m_opt.rows ? std::make_pair(row + 1, 0) : std::make_pair(row, col);
+    // the helix goes on into the rows below the first and above the last (which repeat
+    // them), where the tube's ends run on
+    return c < 0 ? std::make_pair(row - 1, m_opt.cols - 1) : std::make_pair(row + 1, 0);
   }
 
   // centre of the loop of (row, col) in unrolled coordinates, and the helix ramp
@@ -145,8 +155,7 @@ class Layout {
   }
   double row_y(int row) const { return (row - 0.5 * (m_opt.rows - 1)) * m_dims.rh; }
 
-  // dense stitch curve; `forward` = the yarn runs in +x
-  Eigen::Matrix3Xd stitch_points(int row, int col, bool forward, int n) const {
+  LoopDepths depths(int row, int col) const {
     LoopDepths z;
     z.head = head(row, col);
     z.legs = legs(row, col);
@@ -155,6 +164,12 @@ class Layout {
     const auto [rr, rc] = neighbour(row, col, +1);
     z.foot_left = foot(lr, lc);
     z.foot_right = foot(rr, rc);
+    return z;
+  }
+
+  // dense stitch curve; `forward` = the yarn runs in +x
+  Eigen::Matrix3Xd stitch_points(int row, int col, bool forward, int n) const {
+    const LoopDepths z = depths(row, col);
     Eigen::Matrix3Xd p(3, n + 1);
     for (int k = 0; k <= n; ++k) {
       const double t = forward ? -PI + 2 * PI * k / n : PI - 2 * PI * k / n;
@@ -172,7 +187,9 @@ class Layout {
     const double t = right ? PI : -PI;
     double y = row_y(row) + m_dims.sy * LOOP_H * std::cos(t);
     if (m_opt.in_the_round) y += m_dims.rh * (col + t / (2 * PI)) / m_opt.cols;
-    return {loop_x(row, col) + m_dims.sx * t, y, foot(row, col)};
+    // the sinker's depth there, halfway between this stitch's foot and the neighbour's
+    const auto [nr, nc] = neighbour(row, col, right ? 1 : -1);
+    return {loop_x(row, col) + m_dims.sx * t, y, blend(foot(row, col), foot(nr, nc), 0.5)};
   }
 
   // a flat piece doubles back: a half circle in the fabric plane from the end of `row` to
@@ -209,13 +226,35 @@ class Layout {
     return p;
   }
 
+  // the free end of a tube: the helix leaves no room to curl back beside the last stitch
+  // (the first stitch of the last row lies there), so the yarn runs on `length` cm along
+  // the course as the sinkers of a next row would, across the legs of the last row at the
+  // depth of that row's feet
+  Eigen::Matrix3Xd run_on_points(double length, int n) const {
+    const int row = m_opt.rows - 1;
+    const Eigen::Vector3d e = edge_point(row, true);
+    const double slope = m_dims.rh / (m_opt.cols * m_dims.w);  // the helix's rise
+    // half width in x of a sinker's change of depth (see profile_z)
+    const double b = m_dims.sx * (SINK_BLEND + LOOP_A * std::sin(2 * SINK_BLEND));
+    Eigen::Matrix3Xd p(3, n + 1);
+    for (int k = 0; k <= n; ++k) {
+      const double s = length * k / n;
+      double z = blend(e.z(), foot(row + 1, 0), s / (2 * b));
+      for (int j = 1; j * m_dims.w < s + b; ++j)
+        z = blend(z, foot(row + 1, j % m_opt.cols), (s - j * m_dims.w + b) / (2 * b));
+      p.col(k) = Eigen::Vector3d(e.x() + s, e.y() + slope * s, z);
+    }
+    return p;
+  }
+
+  // the tube's circumference is cols·w at the back of the loops (z = −depth), so the
+  // inner layer keeps the flat spacing and the outer one opens up
+  double tube_radius() const { return m_opt.cols * m_dims.w / (2 * PI) + m_dims.depth; }
+
   Eigen::Vector3d wrap(const Eigen::Vector3d& u) const {
     if (!m_opt.in_the_round) return u;
-    // the tube's circumference is cols·w at the back of the loops (z = −depth), so the
-    // inner layer keeps the flat spacing and the outer one opens up
     const double circ = m_opt.cols * m_dims.w;
-    const double radius = circ / (2 * PI) + m_dims.depth;
-    const double theta = 2 * PI * u.x() / circ, rr = radius + u.z();
+    const double theta = 2 * PI * u.x() / circ, rr = tube_radius() + u.z();
     return {rr * std::sin(theta), u.y(), rr * std::cos(theta)};
   }
 
@@ -271,6 +310,68 @@ Dims resolve_dims(const KnitOptions& opt) {
     d = probe;
   }
   return d;
+}
+
+// Lays the free ends: the start tail into pieces.front() (left empty for it) and the end
+// tail at the back. Returns the segments of each.
+int lay_tails(const Layout& layout, const KnitOptions& opt, const Dims& dims, double seg_len,
+              std::vector<PieceSpec>& pieces) {
+  // a flat piece's ends curl outside its edge (see tail_points); so does a tube's start,
+  // where the stitch beside it, the last of the first round, lies a row height up (a
+  // tube's end runs on instead, see run_on_points). Inside a narrow tube the
+  // tail's run along the back bends around the axis more tightly than its few segments
+  // can follow, so there it goes at most an eighth of the way around.
+  double tail_run = 0.75 * dims.w;
+  if (opt.in_the_round) tail_run = std::min(tail_run, opt.cols * dims.w / 8);
+  const double tail_reach = 0.35 * dims.w;
+  const double tail_len = tail_run + PI * std::max(tail_reach, dims.depth + 1.1 * opt.radius);
+  int k_tail = std::max(3, static_cast<int>(std::lround(tail_len / seg_len)));
+
+  // the free ends run one yarn diameter (and a little) behind the back of the first and last
+  // rows and curl around the edge into the first and out of the last stitch. They lie at
+  // the height of the sinkers, beside the loops' legs and feet (the heads are a row height
+  // away), so those set how far back they run; inside a tube, not past its axis.
+  auto z_back_of_row = [&](int row) {
+    double z = std::numeric_limits<double>::infinity();
+    for (int col = 0; col < opt.cols; ++col)
+      z = std::min({z, layout.legs(row, col), layout.foot(row, col)});
+    z -= 2.2 * opt.radius;
+    if (opt.in_the_round) z = std::max(z, -layout.tube_radius() + 2 * opt.radius);
+    return z;
+  };
+  {
+    const Eigen::Vector3d e = layout.edge_point(0, false);
+    const Eigen::Matrix3Xd out =
+        layout.tail_points(e, +1.0, z_back_of_row(0), tail_reach, tail_run, 8 * k_tail);
+    pieces.front() = {out.rowwise().reverse(), k_tail, YarnPiece::TAIL, {0, 0}, {0, 0}};
+  }
+  if (opt.in_the_round) {
+    // inside a tube the tail runs on a smaller circle than the loops: counted from its
+    // length as laid, its segments stay about as long as the stitches' (shorter ones are
+    // stiffer under the length energy and need a smaller time step)
+    Eigen::Matrix3Xd laid = pieces.front().points;
+    for (int j = 0; j < laid.cols(); ++j) laid.col(j) = layout.wrap(laid.col(j));
+    k_tail = std::max(3, static_cast<int>(std::lround(polyline_length(laid) / seg_len)));
+    pieces.front().segments = k_tail;
+    pieces.push_back({layout.run_on_points(k_tail * seg_len, 8 * k_tail),
+                      k_tail,
+                      YarnPiece::TAIL,
+                      {opt.rows - 1, opt.cols - 1},
+                      {opt.rows - 1, opt.cols - 1}});
+  } else {
+    const int last = opt.rows - 1;
+    const double z_back = z_back_of_row(last);
+    const bool forward = last % 2 == 0;
+    const int edge = forward ? opt.cols - 1 : 0;
+    const Eigen::Vector3d e = layout.edge_point(last, forward);
+    pieces.push_back(
+        {layout.tail_points(e, forward ? -1.0 : 1.0, z_back, tail_reach, tail_run, 8 * k_tail),
+         k_tail,
+         YarnPiece::TAIL,
+         {last, edge},
+         {last, edge}});
+  }
+  return k_tail;
 }
 
 void check_options(const Pattern& pattern, const KnitOptions& opt) {
@@ -421,16 +522,11 @@ GeneratedKnit generate_knit(const Pattern& pattern_in, const KnitOptions& opt) {
   const int k = opt.segments_per_stitch;
   const int dense = 16 * k;
 
-  // segment counts of turns and tails: about as long per segment as the stitches
+  // segment counts of turns and tails: about as long per segment as the stitches (tails: see
+  // lay_tails)
   const double seg_len = plain_loop_length(dims) / k;
   const double turn_len = PI * 0.5 * dims.rh;
   const int k_turn = std::max(2, static_cast<int>(std::lround(turn_len / seg_len)));
-  // a flat piece's ends curl outside its edge; a tube has no edge, there they curl within
-  // the sinker (the row above or below is a row height away)
-  const double tail_run = 0.75 * dims.w, tail_reach = (opt.in_the_round ? 0.1 : 0.35) * dims.w;
-  const double tail_len = tail_run + PI * std::max(tail_reach, dims.depth + 1.1 * opt.radius);
-  const int k_tail = std::max(3, static_cast<int>(std::lround(tail_len / seg_len)));
-
   std::vector<PieceSpec> pieces;
   pieces.push_back({});  // the start tail, made below
   for (int row = 0; row < opt.rows; ++row) {
@@ -452,34 +548,7 @@ GeneratedKnit generate_knit(const Pattern& pattern_in, const KnitOptions& opt) {
                         {row + 1, edge}});
     }
   }
-  // the free ends run one yarn diameter (and a little) behind the back of the first and last
-  // rows and curl around the edge into the first and out of the last stitch
-  auto z_back_of_row = [&](int row) {
-    double z = std::numeric_limits<double>::infinity();
-    for (const auto& p : pieces)
-      if (p.kind == YarnPiece::STITCH && p.first.row == row)
-        z = std::min(z, p.points.row(2).minCoeff());
-    return z - 2.2 * opt.radius;
-  };
-  {
-    const Eigen::Vector3d e = layout.edge_point(0, false);
-    const Eigen::Matrix3Xd out =
-        layout.tail_points(e, +1.0, z_back_of_row(0), tail_reach, tail_run, 8 * k_tail);
-    pieces.front() = {out.rowwise().reverse(), k_tail, YarnPiece::TAIL, {0, 0}, {0, 0}};
-  }
-  {
-    const int last = opt.rows - 1;
-    const double z_back = z_back_of_row(last);
-    const bool forward = opt.in_the_round || last % 2 == 0;
-    const int edge = forward ? opt.cols - 1 : 0;
-    const Eigen::Vector3d e = layout.edge_point(last, forward);
-    pieces.push_back(
-        {layout.tail_points(e, forward ? -1.0 : 1.0, z_back, tail_reach, tail_run, 8 * k_tail),
-         k_tail,
-         YarnPiece::TAIL,
-         {last, edge},
-         {last, edge}});
-  }
+  const int k_tail = lay_tails(layout, opt, dims, seg_len, pieces);
 
   // lay the pieces: each is fitted with its segments, holding the last 3 control points
   int total_seg = 0;

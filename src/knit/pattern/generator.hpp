@@ -37,7 +37,9 @@ struct KnitOptions {
 enum class YarnPiece {
   STITCH,  ///< the loop of one stitch (sinker to sinker)
   TURN,    ///< the arc at the end of a row where a flat piece doubles back
-  TAIL,    ///< the free start or end, looped back behind the fabric and glued
+  TAIL,    ///< the free start or end, looped back behind the fabric and glued (a tube's end,
+           ///< which the first stitch of its last round leaves no room to loop beside, runs on
+           ///< along the course across the back or front of its last round instead)
 };
 
 /// The generated yarn. Segment i is shaped by control points i … i+3.
@@ -45,7 +47,7 @@ struct GeneratedKnit {
   Eigen::Matrix3Xd control_points;  ///< one yarn (cm)
   std::vector<StitchCoord> stitch;  ///< per segment; every segment has a stitch (turns
                                     ///< belong half to each row's edge stitch, tails to the
-                                    ///< stitch they enter)
+                                    ///< stitch they enter or leave)
   std::vector<YarnPiece> piece;     ///< per segment
   std::vector<Glue> glues;          ///< each free end glued to its closest yarn point
                                     ///< (segment indices local to this yarn)
