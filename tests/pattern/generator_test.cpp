@@ -64,8 +64,11 @@ TEST(Generator, ColumnsCountFromTheLeftWhicheverWayTheYarnRuns) {
 }
 
 TEST(Generator, GluesTieEachFreeEndToTheFabric) {
-  for (const std::string name : {"stockinette", "seed"}) {
-    const GeneratedKnit g = knit(name, 4, 4);
+  const std::pair<std::string, bool> cases[] = {
+      {"stockinette", false}, {"seed", false}, {"stockinette", true}, {"seed", true}};
+  for (const auto& [name, round] : cases) {
+    SCOPED_TRACE(name + (round ? " in the round" : " flat"));
+    const GeneratedKnit g = knit(name, 4, 4, round);
     ASSERT_EQ(g.glues.size(), 2u);
     const int n = g.num_segments();
     EXPECT_EQ(g.glues[0].a.segment, 0);
@@ -98,21 +101,26 @@ TEST(Generator, GluesTieEachFreeEndToTheFabric) {
 }
 
 // The fitted yarn keeps its distance: no two non-neighbouring segments closer than the
-// bound reached by the generator (see generator.cpp; 1 would be touching tubes).
-TEST(Generator, MinimumDistanceOfFlatPiecesAndTubes) {
+// bound reached by the generator (1 would be touching tubes). The flat stockinette, garter
+// and ribs keep what the loop model lays (its plain loop comes within 0.918 of itself);
+// seed and tubes, where the model lays yarns closer, are pushed apart to 0.9.
+TEST(Generator, EveryPatternKeepsItsDistanceFlatAndInTheRound) {
   const struct {
     const char* name;
-    bool round;
-    double bound;
-  } cases[] = {{"stockinette", false, 0.9}, {"garter", false, 0.9}, {"rib2x2", false, 0.9},
-               {"rib1x1", false, 0.9},      {"seed", false, 0.2},   {"stockinette", true, 0.75},
-               {"rib2x2", true, 0.75}};
-  for (const auto& c : cases) {
-    const GeneratedKnit g = knit(c.name, 6, c.round ? 12 : 6, c.round);
-    EXPECT_GE(g.min_distance_ratio, c.bound)
-        << c.name << (c.round ? " in the round" : " flat") << ": closest segments "
-        << g.min_distance_segment_a << " and " << g.min_distance_segment_b;
-  }
+    double flat, round;
+  } cases[] = {{"stockinette", 0.915, 0.915}, {"reverse_stockinette", 0.915, 0.915},
+               {"garter", 0.915, 0.9},        {"rib1x1", 0.97, 0.9},
+               {"rib2x2", 0.93, 0.9},         {"seed", 0.9, 0.9}};
+  std::set<std::string> covered;
+  for (const auto& c : cases)
+    for (bool round : {false, true}) {
+      covered.insert(c.name);
+      const GeneratedKnit g = knit(c.name, 6, 6, round);
+      EXPECT_GE(g.min_distance_ratio, round ? c.round : c.flat)
+          << c.name << (round ? " in the round" : " flat") << ": closest segments "
+          << g.min_distance_segment_a << " and " << g.min_distance_segment_b;
+    }
+  EXPECT_EQ(covered.size(), builtin_pattern_names().size());
 }
 
 TEST(Generator, GridMinimumDistanceMatchesBruteForce) {
@@ -174,9 +182,29 @@ Eigen::Matrix3Xd loop_polyline(const GeneratedKnit& g, int row, int col) {
   return p;
 }
 
-// crossings of the front views (xy) of the loop of (row, col) and the one below it
-std::vector<Crossing> crossings(const GeneratedKnit& g, int row, int col) {
-  const Eigen::Matrix3Xd a = loop_polyline(g, row, col), b = loop_polyline(g, row - 1, col);
+// A tube (axis y, front face outside) unrolled around the angle `theta_ref`: x becomes the
+// arc length at `radius`, z the distance outside that radius.
+Eigen::Matrix3Xd unrolled(const Eigen::Matrix3Xd& p, double theta_ref, double radius) {
+  Eigen::Matrix3Xd u(3, p.cols());
+  for (int j = 0; j < p.cols(); ++j) {
+    const double theta =
+        theta_ref + std::remainder(std::atan2(p(0, j), p(2, j)) - theta_ref, 2 * M_PI);
+    u.col(j) = Eigen::Vector3d(radius * theta, p(1, j), std::hypot(p(0, j), p(2, j)) - radius);
+  }
+  return u;
+}
+
+// crossings of the front views (xy) of the loop of (row, col) and the one below it; a tube
+// is first unrolled around the loop below
+std::vector<Crossing> crossings(const GeneratedKnit& g, int row, int col, bool round) {
+  Eigen::Matrix3Xd a = loop_polyline(g, row, col), b = loop_polyline(g, row - 1, col);
+  if (round) {
+    const Eigen::Vector3d centre = b.rowwise().mean();
+    const double theta = std::atan2(centre.x(), centre.z());
+    const double radius = std::hypot(centre.x(), centre.z());
+    a = unrolled(a, theta, radius);
+    b = unrolled(b, theta, radius);
+  }
   const double top = b.row(1).maxCoeff(), bottom = b.row(1).minCoeff();
   const double mid = 0.5 * (top + bottom), half = 0.5 * (top - bottom);
   std::vector<Crossing> out;
@@ -202,7 +230,8 @@ std::vector<Crossing> crossings(const GeneratedKnit& g, int row, int col) {
 // that loop), its legs pass in front (+z) for a knit and behind for a purl, as seen from
 // the front; where its foot crosses the legs of the loop below, the other way round.
 // Returns the stitches that break this (or do not pass through the loop below at all).
-std::vector<std::string> interlock_errors(const GeneratedKnit& g, const Pattern& pattern) {
+std::vector<std::string> interlock_errors(const GeneratedKnit& g, const Pattern& pattern,
+                                          bool round = false) {
   std::vector<std::string> errors;
   for (int row = 1; row < pattern.num_rows(); ++row)
     for (int col = 0; col < pattern.num_cols(); ++col) {
@@ -210,7 +239,7 @@ std::vector<std::string> interlock_errors(const GeneratedKnit& g, const Pattern&
       const std::string where = "stitch (" + std::to_string(row) + "," + std::to_string(col) +
                                 ") " + pattern.rows[row][col] + ": ";
       int heads = 0, legs = 0;
-      for (const Crossing& c : crossings(g, row, col)) {
+      for (const Crossing& c : crossings(g, row, col, round)) {
         if (c.y_old > 0.6) {
           ++heads;
           if (!(sigma * c.dz > 0))
@@ -226,8 +255,8 @@ std::vector<std::string> interlock_errors(const GeneratedKnit& g, const Pattern&
   return errors;
 }
 
-void expect_interlocked_as(const GeneratedKnit& g, const Pattern& pattern) {
-  const auto errors = interlock_errors(g, pattern);
+void expect_interlocked_as(const GeneratedKnit& g, const Pattern& pattern, bool round = false) {
+  const auto errors = interlock_errors(g, pattern, round);
   EXPECT_TRUE(errors.empty()) << errors.size() << " errors, first: " << errors.front();
 }
 
@@ -253,6 +282,21 @@ TEST(Generator, KnitAndPurlInterlockAsThePatternSays) {
   o.rows = 6;
   o.cols = 8;
   expect_interlocked_as(generate_knit(chart, o), tile(chart, 6, 8));
+}
+
+// A tube's rows form a helix: the last stitch of each round meets the first of the next
+// at a seam, where garter changes between knit and purl and seed and the ribs change
+// column; every loop, the seam's included, still comes through the one below as charted.
+TEST(Generator, TubesInterlockAsThePatternSays) {
+  for (const std::string& name : builtin_pattern_names()) {
+    SCOPED_TRACE(name);
+    const GeneratedKnit g = knit(name, 6, 6, true);
+    expect_interlocked_as(g, tile(builtin_pattern(name), 6, 6), true);
+  }
+  // the unrolled check tells the faces apart on a tube too
+  const GeneratedKnit g = knit("stockinette", 6, 6, true);
+  EXPECT_EQ(interlock_errors(g, tile(builtin_pattern("reverse_stockinette"), 6, 6), true).size(),
+            4u * 5 * 6);
 }
 
 }  // namespace

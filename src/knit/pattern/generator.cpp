@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <map>
 #include <stdexcept>
 #include <string>
 #include <unordered_map>
@@ -43,15 +44,29 @@ constexpr double UNIT_DEPTH = 2.8;     // z separation D of yarns where they cro
 // t ≈ 1.35 and 1.8 would be too short for 8 segments per stitch to follow), and each
 // crossing fixes the other yarn's depth:
 //   legs ℓ(r,c),  head(r,c) = ℓ(r+1,c) − σ(r+1,c) D,  foot(r,c) = ℓ(r−1,c) − σ(r,c) D,
-// σ = +1 knit, −1 purl (from the front). ℓ = 0 in rows that are all knit or all purl
-// (stockinette, garter); where a row changes between knit and purl (ribs, seed) ℓ = 0.6 σ D,
-// so that the sinker crossing from one face to the other between two columns stays clear
-// of the legs beside it. Between these depths z follows cos²t (Crane's −d cos 2t when head
-// and foot lie at the same depth).
-constexpr double LEG_OFFSET = 0.6;  // ℓ / D where a row changes between knit and purl
+// σ = +1 knit, −1 purl (from the front). Where the row above changes between knit and purl
+// (ribs, seed, a tube's seam), the sinker between two of its columns crosses from one face
+// to the other between the legs of this row's loops: its two ends lie at ℓ(r,c) − σ(r+1,c) D
+// and ℓ(r,c+1) − σ(r+1,c+1) D, so ℓ(r,c) = 0.6 σ(r+1,c) D narrows that swing from 2D to
+// 0.8D. Otherwise (stockinette, garter) ℓ = 0. Taking the offset from the stitch above, not
+// from the stitch itself, matters where a column changes too (seed): from its own stitch
+// the swing would widen to 3.2D and the sinker would pass through the legs. Between these
+// depths z follows cos²t (Crane's −d cos 2t when head and foot lie at the same depth).
+constexpr double LEG_OFFSET = 0.6;  // ℓ / σ(r+1) D where the row above changes kind
 constexpr double SINK_BLEND = 0.5;  // half width (in t) of a sinker's change of depth
 // segments of the next piece fitted along with each piece (see generate_knit)
 constexpr int LOOKAHEAD_SEGMENTS = 3;
+// After the fit, contact points closer than SEPARATION_TARGET·2r are pushed apart (see
+// separate_close_pairs). A plain loop of the model comes within 0.918·2r of itself (its
+// head passes close to its own legs), so a target of 1 would reshape every stitch of the
+// fabrics the model lays well; 0.9 leaves those exactly as laid and lifts the places
+// where the model overlaps (seed, a tube's seam and ends) to the same standard. Pushes go
+// a little beyond the target so that the iterations end.
+constexpr double SEPARATION_TARGET = 0.9;
+constexpr double SEPARATION_OVERSHOOT = 1.02;
+constexpr int SEPARATION_ITERATIONS = 200;
+// contact points per segment at which the distances are measured (min_distance's default)
+constexpr int CONTACT_POINTS = 10;
 
 double smoother(double u) {
   u = std::clamp(u, 0.0, 1.0);
@@ -111,16 +126,22 @@ class Layout {
     row = std::clamp(row, 0, m_opt.rows - 1);
     return m_pattern.is_knit(row, col) ? 1 : -1;
   }
-  // depth of the legs of (row, col)
-  double legs(int row, int col) const {
+  // whether the sinkers on either side of (row, col) lead to a stitch of the other kind
+  bool mixed(int row, int col) const {
     row = std::clamp(row, 0, m_opt.rows - 1);
-    const int s = sigma(row, col);
-    bool mixed = false;
     for (int dc : {-1, 1}) {
       const auto [nr, nc] = neighbour(row, col, dc);
-      if (sigma(nr, nc) != s) mixed = true;
+      if (sigma(nr, nc) != sigma(row, col)) return true;
     }
-    return mixed ? LEG_OFFSET * s * m_dims.depth : 0.0;
+    return false;
+  }
+  // depth of the legs of (row, col): offset towards the face the stitch above is pulled
+  // through to when that stitch's row changes kind beside it, because the feet of the row
+  // above cross these legs (see the z profile)
+  double legs(int row, int col) const {
+    const int above = std::clamp(row + 1, 0, m_opt.rows - 1);
+    if (!mixed(above, col)) return 0.0;
+    return LEG_OFFSET * sigma(above, col) * m_dims.depth;
   }
   double head(int row, int col) const {
     return legs(row + 1, col) - sigma(row + 1, col) * m_dims.depth;
@@ -134,8 +155,9 @@ class Layout {
     const int c = col + dc;
     if (c >= 0 && c < m_opt.cols) return {row, c};
     if (!m_opt.in_the_round) return {row, col};
-    if (c < 0) return row > 0 ? std::make_pair(row - 1, m_opt.cols - 1) : std::make_pair(row, col);
-    return row + 1 < m_opt.rows ? std::make_pair(row + 1, 0) : std::make_pair(row, col);
+    // the helix goes on into the rows below the first and above the last (which repeat
+    // them), where the tube's ends run on
+    return c < 0 ? std::make_pair(row - 1, m_opt.cols - 1) : std::make_pair(row + 1, 0);
   }
 
   // centre of the loop of (row, col) in unrolled coordinates, and the helix ramp
@@ -145,8 +167,7 @@ class Layout {
   }
   double row_y(int row) const { return (row - 0.5 * (m_opt.rows - 1)) * m_dims.rh; }
 
-  // dense stitch curve; `forward` = the yarn runs in +x
-  Eigen::Matrix3Xd stitch_points(int row, int col, bool forward, int n) const {
+  LoopDepths depths(int row, int col) const {
     LoopDepths z;
     z.head = head(row, col);
     z.legs = legs(row, col);
@@ -155,6 +176,12 @@ class Layout {
     const auto [rr, rc] = neighbour(row, col, +1);
     z.foot_left = foot(lr, lc);
     z.foot_right = foot(rr, rc);
+    return z;
+  }
+
+  // dense stitch curve; `forward` = the yarn runs in +x
+  Eigen::Matrix3Xd stitch_points(int row, int col, bool forward, int n) const {
+    const LoopDepths z = depths(row, col);
     Eigen::Matrix3Xd p(3, n + 1);
     for (int k = 0; k <= n; ++k) {
       const double t = forward ? -PI + 2 * PI * k / n : PI - 2 * PI * k / n;
@@ -172,7 +199,9 @@ class Layout {
     const double t = right ? PI : -PI;
     double y = row_y(row) + m_dims.sy * LOOP_H * std::cos(t);
     if (m_opt.in_the_round) y += m_dims.rh * (col + t / (2 * PI)) / m_opt.cols;
-    return {loop_x(row, col) + m_dims.sx * t, y, foot(row, col)};
+    // the sinker's depth there, halfway between this stitch's foot and the neighbour's
+    const auto [nr, nc] = neighbour(row, col, right ? 1 : -1);
+    return {loop_x(row, col) + m_dims.sx * t, y, blend(foot(row, col), foot(nr, nc), 0.5)};
   }
 
   // a flat piece doubles back: a half circle in the fabric plane from the end of `row` to
@@ -209,13 +238,35 @@ class Layout {
     return p;
   }
 
+  // the free end of a tube: the helix leaves no room to curl back beside the last stitch
+  // (the first stitch of the last row lies there), so the yarn runs on `length` cm along
+  // the course as the sinkers of a next row would, across the legs of the last row at the
+  // depth of that row's feet
+  Eigen::Matrix3Xd run_on_points(double length, int n) const {
+    const int row = m_opt.rows - 1;
+    const Eigen::Vector3d e = edge_point(row, true);
+    const double slope = m_dims.rh / (m_opt.cols * m_dims.w);  // the helix's rise
+    // half width in x of a sinker's change of depth (see profile_z)
+    const double b = m_dims.sx * (SINK_BLEND + LOOP_A * std::sin(2 * SINK_BLEND));
+    Eigen::Matrix3Xd p(3, n + 1);
+    for (int k = 0; k <= n; ++k) {
+      const double s = length * k / n;
+      double z = blend(e.z(), foot(row + 1, 0), s / (2 * b));
+      for (int j = 1; j * m_dims.w < s + b; ++j)
+        z = blend(z, foot(row + 1, j % m_opt.cols), (s - j * m_dims.w + b) / (2 * b));
+      p.col(k) = Eigen::Vector3d(e.x() + s, e.y() + slope * s, z);
+    }
+    return p;
+  }
+
+  // the tube's circumference is cols·w at the back of the loops (z = −depth), so the
+  // inner layer keeps the flat spacing and the outer one opens up
+  double tube_radius() const { return m_opt.cols * m_dims.w / (2 * PI) + m_dims.depth; }
+
   Eigen::Vector3d wrap(const Eigen::Vector3d& u) const {
     if (!m_opt.in_the_round) return u;
-    // the tube's circumference is cols·w at the back of the loops (z = −depth), so the
-    // inner layer keeps the flat spacing and the outer one opens up
     const double circ = m_opt.cols * m_dims.w;
-    const double radius = circ / (2 * PI) + m_dims.depth;
-    const double theta = 2 * PI * u.x() / circ, rr = radius + u.z();
+    const double theta = 2 * PI * u.x() / circ, rr = tube_radius() + u.z();
     return {rr * std::sin(theta), u.y(), rr * std::cos(theta)};
   }
 
@@ -271,6 +322,68 @@ Dims resolve_dims(const KnitOptions& opt) {
     d = probe;
   }
   return d;
+}
+
+// Lays the free ends: the start tail into pieces.front() (left empty for it) and the end
+// tail at the back. Returns the segments of each.
+int lay_tails(const Layout& layout, const KnitOptions& opt, const Dims& dims, double seg_len,
+              std::vector<PieceSpec>& pieces) {
+  // a flat piece's ends curl outside its edge (see tail_points); so does a tube's start,
+  // where the stitch beside it, the last of the first round, lies a row height up (a
+  // tube's end runs on instead, see run_on_points). Inside a narrow tube the
+  // tail's run along the back bends around the axis more tightly than its few segments
+  // can follow, so there it goes at most an eighth of the way around.
+  double tail_run = 0.75 * dims.w;
+  if (opt.in_the_round) tail_run = std::min(tail_run, opt.cols * dims.w / 8);
+  const double tail_reach = 0.35 * dims.w;
+  const double tail_len = tail_run + PI * std::max(tail_reach, dims.depth + 1.1 * opt.radius);
+  int k_tail = std::max(3, static_cast<int>(std::lround(tail_len / seg_len)));
+
+  // the free ends run one yarn diameter (and a little) behind the back of the first and last
+  // rows and curl around the edge into the first and out of the last stitch. They lie at
+  // the height of the sinkers, beside the loops' legs and feet (the heads are a row height
+  // away), so those set how far back they run; inside a tube, not past its axis.
+  auto z_back_of_row = [&](int row) {
+    double z = std::numeric_limits<double>::infinity();
+    for (int col = 0; col < opt.cols; ++col)
+      z = std::min({z, layout.legs(row, col), layout.foot(row, col)});
+    z -= 2.2 * opt.radius;
+    if (opt.in_the_round) z = std::max(z, -layout.tube_radius() + 2 * opt.radius);
+    return z;
+  };
+  {
+    const Eigen::Vector3d e = layout.edge_point(0, false);
+    const Eigen::Matrix3Xd out =
+        layout.tail_points(e, +1.0, z_back_of_row(0), tail_reach, tail_run, 8 * k_tail);
+    pieces.front() = {out.rowwise().reverse(), k_tail, YarnPiece::TAIL, {0, 0}, {0, 0}};
+  }
+  if (opt.in_the_round) {
+    // inside a tube the tail runs on a smaller circle than the loops: counted from its
+    // length as laid, its segments stay about as long as the stitches' (shorter ones are
+    // stiffer under the length energy and need a smaller time step)
+    Eigen::Matrix3Xd laid = pieces.front().points;
+    for (int j = 0; j < laid.cols(); ++j) laid.col(j) = layout.wrap(laid.col(j));
+    k_tail = std::max(3, static_cast<int>(std::lround(polyline_length(laid) / seg_len)));
+    pieces.front().segments = k_tail;
+    pieces.push_back({layout.run_on_points(k_tail * seg_len, 8 * k_tail),
+                      k_tail,
+                      YarnPiece::TAIL,
+                      {opt.rows - 1, opt.cols - 1},
+                      {opt.rows - 1, opt.cols - 1}});
+  } else {
+    const int last = opt.rows - 1;
+    const double z_back = z_back_of_row(last);
+    const bool forward = last % 2 == 0;
+    const int edge = forward ? opt.cols - 1 : 0;
+    const Eigen::Vector3d e = layout.edge_point(last, forward);
+    pieces.push_back(
+        {layout.tail_points(e, forward ? -1.0 : 1.0, z_back, tail_reach, tail_run, 8 * k_tail),
+         k_tail,
+         YarnPiece::TAIL,
+         {last, edge},
+         {last, edge}});
+  }
+  return k_tail;
 }
 
 void check_options(const Pattern& pattern, const KnitOptions& opt) {
@@ -338,6 +451,110 @@ Eigen::Matrix3Xd contact_points(const Eigen::Matrix3Xd& cp, int per) {
   return x;
 }
 
+// Points sorted by the cell of a uniform grid, to find the points near each one: all the
+// points within one cell size lie in the 27 cells around it.
+class PointGrid {
+ public:
+  PointGrid(const Eigen::Matrix3Xd& x, double cell) : m_cell(cell) {
+    const int n = static_cast<int>(x.cols());
+    m_cell_of.resize(n);
+    m_keyed.resize(n);
+    for (int a = 0; a < n; ++a) {
+      m_cell_of[a] = (x.col(a) / cell).array().floor().cast<int>();
+      m_keyed[a] = {key_of(m_cell_of[a]), a};
+    }
+    std::sort(m_keyed.begin(), m_keyed.end());
+    m_ranges.reserve(n);
+    for (int s = 0; s < n;) {
+      int e = s;
+      while (e < n && m_keyed[e].first == m_keyed[s].first) ++e;
+      m_ranges[m_keyed[s].first] = {s, e};
+      s = e;
+    }
+  }
+  double cell() const { return m_cell; }
+  // calls f(b) for every point b (a itself included) in the 27 cells around point a
+  template <class F>
+  void for_each_near(int a, F&& f) const {
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) {
+          const auto it = m_ranges.find(key_of(m_cell_of[a] + Eigen::Vector3i(dx, dy, dz)));
+          if (it == m_ranges.end()) continue;
+          for (int s = it->second.first; s < it->second.second; ++s) f(m_keyed[s].second);
+        }
+  }
+
+ private:
+  static std::int64_t key_of(const Eigen::Vector3i& c) {
+    const std::int64_t m = (1 << 20);
+    return ((static_cast<std::int64_t>(c.x()) + m / 2) * m + (c.y() + m / 2)) * m + (c.z() + m / 2);
+  }
+  double m_cell;
+  std::vector<Eigen::Vector3i> m_cell_of;
+  std::vector<std::pair<std::int64_t, int>> m_keyed;
+  std::unordered_map<std::int64_t, std::pair<int, int>> m_ranges;
+};
+
+// The closest pair of contact points of each pair of non-neighbouring segments that comes
+// closer than `cutoff` (≤ the grid cell): (point a, point b) with a < b.
+std::vector<std::pair<int, int>> close_pairs(const Eigen::Matrix3Xd& x, int per, double cutoff) {
+  const PointGrid grid(x, cutoff);
+  std::map<std::pair<int, int>, std::pair<double, std::pair<int, int>>> closest;
+  for (int a = 0; a < x.cols(); ++a)
+    grid.for_each_near(a, [&](int b) {
+      if (b <= a || b / per - a / per <= 1) return;
+      const double d2 = (x.col(a) - x.col(b)).squaredNorm();
+      if (d2 >= cutoff * cutoff) return;
+      const auto key = std::make_pair(a / per, b / per);
+      const auto it = closest.find(key);
+      if (it == closest.end() || d2 < it->second.first) closest[key] = {d2, {a, b}};
+    });
+  std::vector<std::pair<int, int>> out;
+  out.reserve(closest.size());
+  for (const auto& [key, best] : closest) out.push_back(best.second);
+  return out;
+}
+
+// The loop model cannot keep every pair of yarns apart everywhere: where stitches change
+// between knit and purl along the wale as well as along the course (seed, the seam of a
+// tube in garter), a loop's head lies 2.2 D from its legs in depth and on its way passes
+// within 0.8·2r of the legs of the loop above; and the fit cuts the corners of tight bends
+// (a tube's tails, fewer segments per stitch than 8). This pass pushes apart
+// the non-neighbouring contact points closer than `target`·2r, moving the control points
+// of the two segments the least that moves the points apart (Jacobi iterations, each
+// control point averaging the pushes it receives). It only ever separates, so the yarns
+// keep the sides of each other they were laid on and the loops interlock as before.
+void separate_close_pairs(Eigen::Matrix3Xd& cp, double radius, double target, int per) {
+  const double want = target * 2 * radius;
+  const int ncp = static_cast<int>(cp.cols());
+  for (int it = 0; it < SEPARATION_ITERATIONS; ++it) {
+    const Eigen::Matrix3Xd x = contact_points(cp, per);
+    const auto pairs = close_pairs(x, per, want);
+    if (pairs.empty()) return;
+    Eigen::Matrix3Xd push = Eigen::Matrix3Xd::Zero(3, ncp);
+    Eigen::VectorXd weight = Eigen::VectorXd::Zero(ncp);
+    for (const auto& [a, b] : pairs) {
+      const Eigen::Vector3d d = x.col(a) - x.col(b);
+      const double dist = d.norm();
+      if (!(dist > 0)) continue;
+      // each side moves half the way to a little beyond the target
+      const Eigen::Vector3d half = 0.5 * (SEPARATION_OVERSHOOT * want - dist) / dist * d;
+      for (const auto& [point, sign] : {std::make_pair(a, 1.0), std::make_pair(b, -1.0)}) {
+        const int seg = point / per;
+        const Eigen::Vector4d w = bspline_basis((point % per + 0.5) / per);
+        for (int j = 0; j < 4; ++j) {
+          // the least change moving the point: w_j·δ/|w|² (weighted by w_j in the average)
+          push.col(seg + j) += sign * w[j] * w[j] / w.squaredNorm() * half;
+          weight[seg + j] += w[j];
+        }
+      }
+    }
+    for (int j = 0; j < ncp; ++j)
+      if (weight[j] > 0) cp.col(j) += push.col(j) / weight[j];
+  }
+}
+
 }  // namespace
 
 MinDistance min_distance_brute_force(const Eigen::Matrix3Xd& cp, double radius, int per) {
@@ -358,27 +575,7 @@ MinDistance min_distance_brute_force(const Eigen::Matrix3Xd& cp, double radius, 
 MinDistance min_distance(const Eigen::Matrix3Xd& cp, double radius, int per) {
   const Eigen::Matrix3Xd x = contact_points(cp, per);
   const int n = static_cast<int>(x.cols());
-  const double cell = 3 * radius;
-  // sort the points by grid cell, then look up the 27 cells around each point
-  auto key_of = [&](const Eigen::Vector3i& c) -> std::int64_t {
-    const std::int64_t m = (1 << 20);
-    return ((static_cast<std::int64_t>(c.x()) + m / 2) * m + (c.y() + m / 2)) * m + (c.z() + m / 2);
-  };
-  std::vector<Eigen::Vector3i> cell_of(n);
-  std::vector<std::pair<std::int64_t, int>> keyed(n);
-  for (int a = 0; a < n; ++a) {
-    cell_of[a] = (x.col(a) / cell).array().floor().cast<int>();
-    keyed[a] = {key_of(cell_of[a]), a};
-  }
-  std::sort(keyed.begin(), keyed.end());
-  std::unordered_map<std::int64_t, std::pair<int, int>> ranges;
-  ranges.reserve(n);
-  for (int s = 0; s < n;) {
-    int e = s;
-    while (e < n && keyed[e].first == keyed[s].first) ++e;
-    ranges[keyed[s].first] = {s, e};
-    s = e;
-  }
+  const PointGrid grid(x, 3 * radius);
   struct Best {
     double d2 = std::numeric_limits<double>::infinity();
     int a = -1, b = -1;
@@ -387,21 +584,14 @@ MinDistance min_distance(const Eigen::Matrix3Xd& cp, double radius, int per) {
       tbb::blocked_range<int>(0, n, 256), Best{},
       [&](const tbb::blocked_range<int>& r, Best acc) {
         for (int a = r.begin(); a < r.end(); ++a)
-          for (int dx = -1; dx <= 1; ++dx)
-            for (int dy = -1; dy <= 1; ++dy)
-              for (int dz = -1; dz <= 1; ++dz) {
-                const auto it = ranges.find(key_of(cell_of[a] + Eigen::Vector3i(dx, dy, dz)));
-                if (it == ranges.end()) continue;
-                for (int s = it->second.first; s < it->second.second; ++s) {
-                  const int b = keyed[s].second;
-                  if (b <= a || b / per - a / per <= 1) continue;
-                  const double d2 = (x.col(a) - x.col(b)).squaredNorm();
-                  // ties broken by index so the result does not depend on the thread count
-                  if (d2 < acc.d2 ||
-                      (d2 == acc.d2 && std::make_pair(a, b) < std::make_pair(acc.a, acc.b)))
-                    acc = {d2, a, b};
-                }
-              }
+          grid.for_each_near(a, [&](int b) {
+            if (b <= a || b / per - a / per <= 1) return;
+            const double d2 = (x.col(a) - x.col(b)).squaredNorm();
+            // ties broken by index so the result does not depend on the thread count
+            if (d2 < acc.d2 ||
+                (d2 == acc.d2 && std::make_pair(a, b) < std::make_pair(acc.a, acc.b)))
+              acc = {d2, a, b};
+          });
         return acc;
       },
       [](const Best& l, const Best& r) {
@@ -409,7 +599,8 @@ MinDistance min_distance(const Eigen::Matrix3Xd& cp, double radius, int per) {
           return r;
         return l;
       });
-  if (best.a < 0 || best.d2 > cell * cell) return min_distance_brute_force(cp, radius, per);
+  if (best.a < 0 || best.d2 > grid.cell() * grid.cell())
+    return min_distance_brute_force(cp, radius, per);
   return {std::sqrt(best.d2) / (2 * radius), best.a / per, best.b / per};
 }
 
@@ -421,16 +612,11 @@ GeneratedKnit generate_knit(const Pattern& pattern_in, const KnitOptions& opt) {
   const int k = opt.segments_per_stitch;
   const int dense = 16 * k;
 
-  // segment counts of turns and tails: about as long per segment as the stitches
+  // segment counts of turns and tails: about as long per segment as the stitches (tails: see
+  // lay_tails)
   const double seg_len = plain_loop_length(dims) / k;
   const double turn_len = PI * 0.5 * dims.rh;
   const int k_turn = std::max(2, static_cast<int>(std::lround(turn_len / seg_len)));
-  // a flat piece's ends curl outside its edge; a tube has no edge, there they curl within
-  // the sinker (the row above or below is a row height away)
-  const double tail_run = 0.75 * dims.w, tail_reach = (opt.in_the_round ? 0.1 : 0.35) * dims.w;
-  const double tail_len = tail_run + PI * std::max(tail_reach, dims.depth + 1.1 * opt.radius);
-  const int k_tail = std::max(3, static_cast<int>(std::lround(tail_len / seg_len)));
-
   std::vector<PieceSpec> pieces;
   pieces.push_back({});  // the start tail, made below
   for (int row = 0; row < opt.rows; ++row) {
@@ -452,34 +638,7 @@ GeneratedKnit generate_knit(const Pattern& pattern_in, const KnitOptions& opt) {
                         {row + 1, edge}});
     }
   }
-  // the free ends run one yarn diameter (and a little) behind the back of the first and last
-  // rows and curl around the edge into the first and out of the last stitch
-  auto z_back_of_row = [&](int row) {
-    double z = std::numeric_limits<double>::infinity();
-    for (const auto& p : pieces)
-      if (p.kind == YarnPiece::STITCH && p.first.row == row)
-        z = std::min(z, p.points.row(2).minCoeff());
-    return z - 2.2 * opt.radius;
-  };
-  {
-    const Eigen::Vector3d e = layout.edge_point(0, false);
-    const Eigen::Matrix3Xd out =
-        layout.tail_points(e, +1.0, z_back_of_row(0), tail_reach, tail_run, 8 * k_tail);
-    pieces.front() = {out.rowwise().reverse(), k_tail, YarnPiece::TAIL, {0, 0}, {0, 0}};
-  }
-  {
-    const int last = opt.rows - 1;
-    const double z_back = z_back_of_row(last);
-    const bool forward = opt.in_the_round || last % 2 == 0;
-    const int edge = forward ? opt.cols - 1 : 0;
-    const Eigen::Vector3d e = layout.edge_point(last, forward);
-    pieces.push_back(
-        {layout.tail_points(e, forward ? -1.0 : 1.0, z_back, tail_reach, tail_run, 8 * k_tail),
-         k_tail,
-         YarnPiece::TAIL,
-         {last, edge},
-         {last, edge}});
-  }
+  const int k_tail = lay_tails(layout, opt, dims, seg_len, pieces);
 
   // lay the pieces: each is fitted with its segments, holding the last 3 control points
   int total_seg = 0;
@@ -529,6 +688,8 @@ GeneratedKnit generate_knit(const Pattern& pattern_in, const KnitOptions& opt) {
     }
   }
   assert(ncp == total_seg + 3);
+  if (min_distance(out.control_points, opt.radius, CONTACT_POINTS).ratio < SEPARATION_TARGET)
+    separate_close_pairs(out.control_points, opt.radius, SEPARATION_TARGET, CONTACT_POINTS);
 
   // glue each free end to the closest yarn point outside its own tail and the stitch it
   // enters

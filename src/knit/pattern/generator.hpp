@@ -1,7 +1,9 @@
 #pragma once
 // Builds the initial yarn geometry of a knitted piece (MODEL.md §6): one continuous yarn
 // laid stitch by stitch from a closed-form loop curve, each stitch fitted with a fixed
-// number of cubic B-spline segments that continue C² from the control points already laid.
+// number of cubic B-spline segments that continue C² from the control points already laid;
+// where the fitted yarn still comes closer to itself than 0.9 of a yarn diameter, the
+// pieces are pushed apart (see min_distance_ratio).
 //
 // Coordinates (cm): x along the course (rows run along x), y along the wale (rows stack in
 // +y), z out of the fabric (front face = +z). The flat fabric is centred at the origin; a
@@ -37,7 +39,9 @@ struct KnitOptions {
 enum class YarnPiece {
   STITCH,  ///< the loop of one stitch (sinker to sinker)
   TURN,    ///< the arc at the end of a row where a flat piece doubles back
-  TAIL,    ///< the free start or end, looped back behind the fabric and glued
+  TAIL,    ///< the free start or end, looped back behind the fabric and glued (a tube's end,
+           ///< which the first stitch of its last round leaves no room to loop beside, runs on
+           ///< along the course across the back or front of its last round instead)
 };
 
 /// The generated yarn. Segment i is shaped by control points i … i+3.
@@ -45,7 +49,7 @@ struct GeneratedKnit {
   Eigen::Matrix3Xd control_points;  ///< one yarn (cm)
   std::vector<StitchCoord> stitch;  ///< per segment; every segment has a stitch (turns
                                     ///< belong half to each row's edge stitch, tails to the
-                                    ///< stitch they enter)
+                                    ///< stitch they enter or leave)
   std::vector<YarnPiece> piece;     ///< per segment
   std::vector<Glue> glues;          ///< each free end glued to its closest yarn point
                                     ///< (segment indices local to this yarn)
@@ -54,7 +58,10 @@ struct GeneratedKnit {
   double loop_depth_cm = 0;
   double loop_length_cm = 0;  ///< mean yarn length of one stitch's segments
   /// min over non-neighbouring segment pairs (|i − j| > 1) of the distance between their
-  /// contact points (10 per segment, midpoint rule) divided by 2r; ≥ 1: no overlap.
+  /// contact points (10 per segment, midpoint rule) divided by 2r; ≥ 1: no overlap. The
+  /// model's plain loop comes within 0.918 of itself (flat stockinette and garter: 0.918,
+  /// flat ribs 0.935–0.976, as laid); closer pairs (seed, a tube's seam and ends) are pushed
+  /// apart to 0.9 after the fit, so this is at least 0.9 unless the pushes fail to converge.
   double min_distance_ratio = 0;
   int min_distance_segment_a = -1, min_distance_segment_b = -1;  ///< where it occurs
   /// gap |y(a) − y(b)| of each glue as generated (cm): the ends lie against the fabric,
