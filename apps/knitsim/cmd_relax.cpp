@@ -75,7 +75,7 @@ knit::State resumed_state(const std::string& path, const knit::GeneratedKnit& kn
                           const std::string& pattern) {
   namespace fs = std::filesystem;
   // the run that wrote the file names its pattern in its summary (DIR/ or DIR/frames/)
-  for (const fs::path dir :
+  for (const fs::path& dir :
        {fs::path(path).parent_path(), fs::path(path).parent_path().parent_path()}) {
     std::ifstream in(dir / "summary.json");
     if (!in) continue;

@@ -13,6 +13,7 @@
 
 #include "knit/model/model.hpp"
 #include "knit/pattern/pattern.hpp"
+#include "knit/pattern/yarn_spacing.hpp"
 
 namespace knit {
 
@@ -85,20 +86,5 @@ GeneratedKnit generate_knit(const Pattern& pattern, const KnitOptions& options);
 /// (s); with 0 the glue holds the ends together from the start.
 Model build_knit_model(const GeneratedKnit& knit, const Params& params, double rest_scale = 1.0,
                        double glue_close_time = 0);
-
-/// Closest approach between non-neighbouring segments of one yarn.
-struct MinDistance {
-  double ratio = 0;  ///< distance / (2 r)
-  int segment_a = -1, segment_b = -1;
-};
-
-/// min over pairs of segments with |i − j| > 1 of the distance between their contact
-/// points (`points_per_segment`, midpoint rule), divided by 2·radius. Uses a uniform grid
-/// hash (cells of 3r); when no pair is closer than a cell it falls back to all pairs.
-MinDistance min_distance(const Eigen::Matrix3Xd& control_points, double radius,
-                         int points_per_segment = 10);
-/// The same by testing every pair (the slow oracle for tests).
-MinDistance min_distance_brute_force(const Eigen::Matrix3Xd& control_points, double radius,
-                                     int points_per_segment = 10);
 
 }  // namespace knit
