@@ -6,7 +6,6 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
-#include <unordered_map>
 
 #include "knit/spline/basis.hpp"
 #include "knit/spline/fit.hpp"
