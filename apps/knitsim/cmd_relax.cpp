@@ -72,7 +72,7 @@ knit::State generated_state(const knit::GeneratedKnit& knit) {
 // The state of an earlier relaxation of the same knit: same control point count and the
 // same stitch of every segment, or an error naming the file and what differs.
 knit::State resumed_state(const std::string& path, const knit::GeneratedKnit& knit,
-                          const std::string& pattern) {
+                          const std::string& pattern, bool in_the_round) {
   namespace fs = std::filesystem;
   // the run that wrote the file names its pattern in its summary (DIR/ or DIR/frames/)
   for (const fs::path& dir :
@@ -85,6 +85,12 @@ knit::State resumed_state(const std::string& path, const knit::GeneratedKnit& kn
       throw std::invalid_argument("--resume " + path + ": it was relaxed from pattern " +
                                   s["pattern"].get<std::string>() + " (" +
                                   (dir / "summary.json").string() + "), not " + pattern);
+    if (s.is_object() && s.contains("in_the_round") && s["in_the_round"].is_boolean() &&
+        s["in_the_round"].get<bool>() != in_the_round)
+      throw std::invalid_argument("--resume " + path + ": it was knitted " +
+                                  (in_the_round ? "flat" : "in the round") + " (" +
+                                  (dir / "summary.json").string() + "); give " +
+                                  (in_the_round ? "no --round" : "--round") + " to go on");
     break;
   }
   const knit::StateFile f = knit::read_state_file(path);
@@ -195,8 +201,9 @@ void register_relax(CLI::App& app) {
     params.alpha_large = o->damping.alpha_large;
     // a resumed state carries its time, so its glues go on closing where they were
     const knit::Model model = knit::build_knit_model(knit, params, o->shrink, GLUE_CLOSE_TIME);
-    knit::State state =
-        o->resume.empty() ? generated_state(knit) : resumed_state(o->resume, knit, o->pattern);
+    knit::State state = o->resume.empty()
+                            ? generated_state(knit)
+                            : resumed_state(o->resume, knit, o->pattern, o->knit.in_the_round);
     auto control = make_thread_control(o->threads);
     fs::create_directories(o->out);
     knit::write_state_file((fs::path(o->out) / "initial.kstate").string(),

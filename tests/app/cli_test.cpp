@@ -151,6 +151,10 @@ TEST(Cli, ResumedRelaxationContinuesTheSamePath) {
                           "/first/relaxed.kstate --out " + dir + "/y");
   EXPECT_EQ(size.code, 1);
   EXPECT_NE(size.output.find("control points"), std::string::npos) << size.output;
+  const Result round = run("relax garter" + opts + " --round --resume " + dir +
+                           "/first/relaxed.kstate --out " + dir + "/z");
+  EXPECT_EQ(round.code, 1);
+  EXPECT_NE(round.output.find("knitted flat"), std::string::npos) << round.output;
   EXPECT_FALSE(fs::exists(dir + "/y"));
 }
 
