@@ -26,7 +26,8 @@ inline constexpr double RELAX_SHRINK = 0.935;
 /// otherwise: a tenth of MODEL.md §8's 1.5. With 1.5 every control point is dragged at
 /// ≈ 1000/s, so the soft, sample-wide motions (edges rolling, ribs pleating, rows
 /// stacking) creep: a 16×16 rib needs > 4 s of simulated time to draw in as far as it
-/// does in 1 s with 0.15. The rest shape is set by the energies, not by the damping. With
+/// does in 1 s with 0.15. Rest shapes are minima of the energies; the damping sets the
+/// path to them (and a lightly damped path can swing into another minimum). With
 /// none at all only the non-rigid damping filters (α = 0.3 each step) and contact damping
 /// act, which leave the sheet-scale swinging of a large sample nearly undamped: a 16×16
 /// garter then bows (edge curl 1.5 after 4 s) where with 0.15 it stays flat (0.16 after
