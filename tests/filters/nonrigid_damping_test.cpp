@@ -18,9 +18,11 @@ Model swatch(int rows = 4, int cols = 4) {
   return build_knit_model(generate_knit(builtin_pattern("stockinette"), o), Params{});
 }
 
-Eigen::VectorXd positions(const Model& m) {
+// The control points of swatch(rows, cols) as generated.
+Eigen::VectorXd positions(int rows = 4, int cols = 4) {
   KnitOptions o;
-  o.rows = o.cols = 4;
+  o.rows = rows;
+  o.cols = cols;
   const GeneratedKnit g = generate_knit(builtin_pattern("stockinette"), o);
   return Eigen::Map<const Eigen::VectorXd>(g.control_points.data(), g.control_points.size());
 }
@@ -106,7 +108,7 @@ TEST(Filter, SampleMassesMatchTheLumpedMass) {
 
 TEST(Filter, RigidMotionIsLeftAlone) {
   const Model m = swatch();
-  const Eigen::VectorXd q = positions(m);
+  const Eigen::VectorXd q = positions();
   const Eigen::VectorXd v0 = rigid_velocity(q, {3, -1, 2}, {0.5, 2, -1});
   NonRigidDampingFilter single(m, everything(m), 1.0);
   NonRigidDampingFilter two_pass(m, 0.7, 0.4);
@@ -125,7 +127,7 @@ TEST(Filter, RigidMotionIsLeftAlone) {
 // filter converges to rigid motion (a fixed point: the non-rigid part keeps shrinking).
 TEST(Filter, AlphaOneMakesTheMotionRigid) {
   const Model m = swatch();
-  const Eigen::VectorXd q = positions(m);
+  const Eigen::VectorXd q = positions();
   NonRigidDampingFilter f(m, everything(m), 1.0);
   const SampleSegments& s = f.samples();
   const Eigen::Matrix3Xd x = s.positions(m, q);
@@ -156,12 +158,7 @@ TEST(Filter, AlphaOneMakesTheMotionRigid) {
 
 TEST(Filter, MomentumIsConservedForAnyAlphaAndOverlap) {
   const Model m = swatch(5, 6);
-  KnitOptions o;
-  o.rows = 5;
-  o.cols = 6;
-  const GeneratedKnit g = generate_knit(builtin_pattern("stockinette"), o);
-  const Eigen::VectorXd q =
-      Eigen::Map<const Eigen::VectorXd>(g.control_points.data(), g.control_points.size());
+  const Eigen::VectorXd q = positions(5, 6);
   const Eigen::VectorXd v0 = random_velocity(m.num_dof(), 11);
   const Eigen::Vector3d p0 = linear_momentum(m, v0), l0 = angular_momentum(m, q, v0);
   const double p_scale = linear_momentum(m, v0.cwiseAbs()).norm();
@@ -234,12 +231,7 @@ TEST(Filter, SegmentsWithoutStitchesAreUntouched) {
 
 TEST(Filter, ResultDoesNotDependOnThreadCount) {
   const Model m = swatch(4, 6);
-  KnitOptions o;
-  o.rows = 4;
-  o.cols = 6;
-  const GeneratedKnit g = generate_knit(builtin_pattern("stockinette"), o);
-  const Eigen::VectorXd q =
-      Eigen::Map<const Eigen::VectorXd>(g.control_points.data(), g.control_points.size());
+  const Eigen::VectorXd q = positions(4, 6);
   NonRigidDampingFilter f(m, 0.6, 0.3);
   Eigen::VectorXd a = random_velocity(m.num_dof(), 5), b = a;
   {
