@@ -18,16 +18,14 @@ int main(int argc, char** argv) {
   app.add_option("--max-time", max_time, "simulated seconds");
   app.add_option("--threads", threads, "0 = all cores");
   CLI11_PARSE(app, argc, argv);
-  std::unique_ptr<tbb::global_control> gc;
-  if (threads > 0)
-    gc = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
-                                               threads);
+  const auto thread_cap = knit::bench::limit_threads(threads);
   knit::KnitOptions ko;
   ko.rows = rows;
   ko.cols = cols;
   const knit::GeneratedKnit knit = knit::generate_knit(knit::load_pattern(pattern), ko);
   knit::Params p = knit::Params::relaxation();
   p.gravity.setZero();
+  p.k_global = knit::RELAX_K_GLOBAL;  // as `knitsim relax` runs a pattern
   const knit::Model model = knit::build_knit_model(knit, p, knit::RELAX_SHRINK, 0.05);
   knit::Simulator sim(model);
   sim.add_filter(
@@ -48,6 +46,7 @@ int main(int argc, char** argv) {
                         {"rows", rows},
                         {"cols", cols},
                         {"segments", model.num_seg()},
+                        {"k_global", p.k_global},
                         {"threads", knit::bench::active_threads()},
                         {"status", r.summary["status"]},
                         {"relaxed", r.summary["relaxed"]},

@@ -20,10 +20,7 @@ int main(int argc, char** argv) {
   app.add_option("--steps", steps);
   app.add_option("--threads", threads, "0 = all cores");
   CLI11_PARSE(app, argc, argv);
-  std::unique_ptr<tbb::global_control> gc;
-  if (threads > 0)
-    gc = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
-                                               threads);
+  const auto thread_cap = knit::bench::limit_threads(threads);
   knit::bench::StepSetup s = knit::bench::make_step_setup(pattern, rows, cols, points, state);
   nlohmann::json out = knit::bench::time_steps(s, 3, steps, 1.0 / 11800);
   out["benchmark"] = "step";

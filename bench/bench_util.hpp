@@ -37,6 +37,13 @@ inline nlohmann::json machine_info() {
   };
 }
 
+/// Caps TBB's worker threads at `threads` while the returned object lives (0 = no cap).
+inline std::unique_ptr<tbb::global_control> limit_threads(int threads) {
+  if (threads <= 0) return nullptr;
+  return std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                               threads);
+}
+
 /// Worker threads in force here: the current arena's size, capped by any global_control.
 inline int active_threads() {
   return static_cast<int>(std::min<size_t>(
