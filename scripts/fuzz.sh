@@ -30,7 +30,7 @@ if ! cmake --build "$build_dir" -j "$jobs" --target "${targets[@]}" >"$build_dir
   exit 1
 fi
 
-shared=../shared/data/yarns
+shared=tests/data/yarns
 status=0
 for t in "${targets[@]}"; do
   corpus="$build_dir/corpus/$t"

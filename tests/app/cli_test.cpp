@@ -172,7 +172,7 @@ TEST(Cli, RelaxRejectsUnknownPatternAndWritesNothing) {
 TEST(Cli, SceneCanImportYarnFiles) {
   const std::string scene = ::testing::TempDir() + "/cli_import.json";
   std::ofstream(scene)
-      << R"({"yarns": [{"import": {"path": ")" << KNIT_SHARED_DATA
+      << R"({"yarns": [{"import": {"path": ")" << KNIT_TEST_DATA
       << R"(/yarns/knit-2x2.yarns"}}], "gravity": [0,0,0], "params": {"contact": false},
                               "time_step": 0.00002, "duration": 0.0002})";
   const std::string out = temp_dir("cli_import_out");

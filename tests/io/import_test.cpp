@@ -17,7 +17,7 @@ namespace knit {
 namespace {
 
 namespace fs = std::filesystem;
-const fs::path YARNS = fs::path(KNIT_SHARED_DATA) / "yarns";
+const fs::path YARNS = fs::path(KNIT_TEST_DATA) / "yarns";
 
 std::string slurp(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);

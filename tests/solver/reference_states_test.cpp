@@ -1,0 +1,121 @@
+// Regression against states kept in tests/data/reference/: the example scenes (0.05 s
+// each) and two short relaxations of generated knits end where they ended when the
+// references were written (by the explicit step before the simulation core was rebuilt
+// around Model / State / StepData). Positions and velocities agree to 1e-12 relative to
+// the larger of 1 and the value; the control-point layout and time exactly. The
+// generated 42×32 knits are byte-identical to the references (FNV-1a of their
+// positions' bytes).
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+
+#include "knit/io/state_file.hpp"
+#include "knit/pattern/generator.hpp"
+#include "knit/pattern/pattern.hpp"
+
+namespace knit {
+namespace {
+
+namespace fs = std::filesystem;
+
+int run_app(const std::string& args, std::string& output) {
+  const std::string cmd = std::string(KNIT_APP) + " " + args + " 2>&1";
+  FILE* pipe = popen(cmd.c_str(), "r");
+  std::array<char, 4096> buf;
+  while (size_t n = fread(buf.data(), 1, buf.size(), pipe)) output.append(buf.data(), n);
+  return WEXITSTATUS(pclose(pipe));
+}
+
+std::string fresh_dir(const std::string& name) {
+  const fs::path p = fs::path(::testing::TempDir()) / ("reference_" + name);
+  fs::remove_all(p);
+  return p.string();
+}
+
+void expect_same_state(const std::string& got_path, const std::string& reference) {
+  const StateFile got = read_state_file(got_path);
+  const StateFile want =
+      read_state_file((fs::path(KNIT_TEST_DATA) / "reference" / reference).string());
+  ASSERT_EQ(got.yarn_cp_counts, want.yarn_cp_counts) << reference;
+  EXPECT_EQ(got.state.time, want.state.time) << reference;
+  auto compare = [&](const Eigen::VectorXd& a, const Eigen::VectorXd& b, const char* what) {
+    ASSERT_EQ(a.size(), b.size());
+    for (Eigen::Index k = 0; k < a.size(); ++k)
+      ASSERT_LE(std::abs(a[k] - b[k]), 1e-12 * std::max(1.0, std::abs(b[k])))
+          << reference << ": " << what << "[" << k << "] = " << a[k] << ", reference " << b[k];
+  };
+  compare(got.state.q, want.state.q, "q");
+  compare(got.state.v, want.state.v, "v");
+}
+
+class ExampleScene : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(ExampleScene, EndsInTheReferenceState) {
+  const std::string name = GetParam();
+  const std::string out = fresh_dir(name);
+  std::string output;
+  ASSERT_EQ(run_app(std::string("simulate ") + KNIT_EXAMPLES + "/" + name +
+                        ".json --duration 0.05 --quiet --threads 2 --out " + out,
+                    output),
+            0)
+      << output;
+  expect_same_state(out + "/final.kstate", "scene_" + name + ".kstate");
+}
+
+INSTANTIATE_TEST_SUITE_P(Examples, ExampleScene,
+                         ::testing::Values("crossing", "drop_on_yarn", "hanging", "overhand_knot",
+                                           "pendulum", "pulled"));
+
+TEST(ReferenceStates, FlatStockinetteRelaxation) {
+  const std::string out = fresh_dir("relax_flat");
+  std::string output;
+  ASSERT_EQ(run_app("relax stockinette --rows 6 --cols 6 --max-time 0.05 --check-every 100 "
+                    "--quiet --threads 2 --out " + out,
+                    output),
+            0)
+      << output;
+  expect_same_state(out + "/relaxed.kstate", "relax_stockinette_6x6.kstate");
+}
+
+TEST(ReferenceStates, RibInTheRoundRelaxation) {
+  const std::string out = fresh_dir("relax_round");
+  std::string output;
+  ASSERT_EQ(run_app("relax rib2x2 --round --rows 6 --cols 8 --max-time 0.05 --check-every 100 "
+                    "--quiet --threads 1 --out " + out,
+                    output),
+            0)
+      << output;
+  expect_same_state(out + "/relaxed.kstate", "relax_rib2x2_round_6x8.kstate");
+}
+
+// FNV-1a over the bytes of the control points, as laid out in memory (x, y, z per point)
+std::uint64_t fnv1a(const Eigen::Matrix3Xd& points) {
+  std::uint64_t h = 0xcbf29ce484222325ull;
+  const auto* bytes = reinterpret_cast<const unsigned char*>(points.data());
+  for (Eigen::Index k = 0; k < points.size() * Eigen::Index(sizeof(double)); ++k) {
+    h ^= bytes[k];
+    h *= 0x100000001b3ull;
+  }
+  return h;
+}
+
+TEST(ReferenceStates, Generated42x32KnitsAreByteIdentical) {
+  const std::pair<const char*, std::uint64_t> expected[] = {
+      {"stockinette", 0x63867a14978c6aeaull},
+      {"garter", 0x088d399a468a83efull},
+      {"rib2x2", 0x90c595887d3e5e07ull}};
+  for (const auto& [pattern, hash] : expected) {
+    KnitOptions o;
+    o.rows = 42;
+    o.cols = 32;
+    const GeneratedKnit knit = generate_knit(load_pattern(pattern), o);
+    EXPECT_EQ(knit.control_points.cols(), 10847) << pattern;
+    EXPECT_EQ(fnv1a(knit.control_points), hash) << pattern;
+  }
+}
+
+}  // namespace
+}  // namespace knit
