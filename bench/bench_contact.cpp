@@ -64,8 +64,9 @@ int main(int argc, char** argv) {
     const int per_row = std::max(1, static_cast<int>(std::lround(std::sqrt(loops / 1.4))));
     const int rows = std::max(1, (loops + per_row - 1) / per_row);
     knit::Params params;
-    params.contact_points = points;
-    const knit::ModelBuilder builder = knit::knit_like_sample(rows, per_row, 8, params.radius, 0.9);
+    params.discretisation.contact_points = points;
+    const knit::ModelBuilder builder =
+        knit::knit_like_sample(rows, per_row, 8, params.material.radius, 0.9);
     const knit::Model model = builder.build(params);
     const Eigen::VectorXd q = builder.positions();
     // small random velocities so that the contact damping is evaluated too

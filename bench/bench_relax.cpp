@@ -5,7 +5,7 @@
 #include <iostream>
 
 #include "bench_util.hpp"
-#include "knit/solver/relaxation.hpp"
+#include "knit/recipes/relax_knit.hpp"
 
 int main(int argc, char** argv) {
   std::string pattern = "stockinette";
@@ -19,42 +19,27 @@ int main(int argc, char** argv) {
   app.add_option("--threads", threads, "0 = all cores");
   CLI11_PARSE(app, argc, argv);
   const auto thread_cap = knit::bench::limit_threads(threads);
-  knit::KnitOptions ko;
-  ko.rows = rows;
-  ko.cols = cols;
-  const knit::GeneratedKnit knit = knit::generate_knit(knit::load_pattern(pattern), ko);
-  knit::Params p = knit::Params::relaxation();
-  p.gravity.setZero();
-  p.k_global = knit::RELAX_K_GLOBAL;  // as `knitsim relax` runs a pattern
-  const knit::Model model = knit::build_knit_model(knit, p, knit::RELAX_SHRINK, 0.05);
-  knit::Simulator sim(model);
-  sim.add_filter(
-      std::make_unique<knit::NonRigidDampingFilter>(model, p.alpha_small, p.alpha_large));
-  knit::State state;
-  state.q =
-      Eigen::Map<const Eigen::VectorXd>(knit.control_points.data(), knit.control_points.size());
-  state.v = Eigen::VectorXd::Zero(state.q.size());
-  knit::RelaxOptions ro;
-  ro.max_time = max_time;
-  ro.check_every = 1180;
-  ro.out_dir = "/tmp/knitsim_bench_relax";
-  ro.progress = false;
-  ro.write_frames = false;
-  const knit::RunReport r = knit::relax(sim, state, ro);
+  knit::RelaxKnitOptions o;  // as `knitsim relax PATTERN` runs it
+  o.knit.rows = rows;
+  o.knit.cols = cols;
+  o.run.max_time = max_time;
+  o.run.check_every = 1180;
+  o.run.progress = false;  // and no out_dir: nothing written
+  const knit::RelaxResult r = knit::relax_knit(pattern, o);
   nlohmann::json out = {{"benchmark", "relax"},
                         {"pattern", pattern},
                         {"rows", rows},
                         {"cols", cols},
-                        {"segments", model.num_seg()},
-                        {"k_global", p.k_global},
+                        {"segments", r.model.num_seg()},
+                        {"k_global", o.params.material.k_global},
                         {"threads", knit::bench::active_threads()},
-                        {"status", r.summary["status"]},
-                        {"relaxed", r.summary["relaxed"]},
-                        {"steps", r.steps},
-                        {"sim_time_s", r.summary["sim_time_s"]},
-                        {"wall_time_s", r.summary["wall_time_s"]},
-                        {"us_per_segment_step", r.summary["us_per_segment_step"]},
-                        {"stage_seconds", r.summary["stage_seconds"]},
+                        {"status", r.report.summary["status"]},
+                        {"relaxed", r.report.summary["relaxed"]},
+                        {"steps", r.report.steps},
+                        {"sim_time_s", r.report.summary["sim_time_s"]},
+                        {"wall_time_s", r.report.summary["wall_time_s"]},
+                        {"us_per_segment_step", r.report.summary["us_per_segment_step"]},
+                        {"stage_seconds", r.report.summary["stage_seconds"]},
                         {"machine", knit::bench::machine_info()}};
   std::cout << out.dump(2) << "\n";
 }

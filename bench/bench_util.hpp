@@ -77,86 +77,92 @@ inline double now_s() {
 #include "knit/io/state_file.hpp"
 #include "knit/pattern/generator.hpp"
 #include "knit/pattern/pattern.hpp"
+#include "knit/recipes/simulate_scene.hpp"
+#include "knit/scene/scene.hpp"
 #include "knit/solver/simulator.hpp"
 
 namespace knit::bench {
 
-/// A knitted sample ready to step with the simulation parameters (MODEL.md §8): the
-/// generated yarn of `pattern` (or, when `state_path` is given, a relaxed state of the same
-/// pattern and size, e.g. out/relax/relaxed.kstate), its rest lengths taken from that
-/// geometry, length constraints on, non-rigid damping on, gravity on.
+/// A knitted sample ready to step with the simulation parameters (MODEL.md §8), length
+/// constraints on, non-rigid damping on, gravity on: a relaxed knit read from `state_path`
+/// (a .kstate written by `knitsim relax`, placed as a scene places it), or, without one,
+/// the generated yarn of `pattern` at rows × cols with rest lengths from that geometry.
 struct StepSetup {
   std::unique_ptr<Simulator> sim;
   State state;
   bool relaxed = false;
+  int rows = 0, cols = 0;
+  std::string pattern;
 };
 
 inline StepSetup make_step_setup(const std::string& pattern, int rows, int cols, int contact_points,
                                  const std::string& state_path = "") {
-  KnitOptions ko;
-  ko.rows = rows;
-  ko.cols = cols;
-  GeneratedKnit knit = generate_knit(load_pattern(pattern), ko);
-  StepSetup s;
-  if (!state_path.empty()) {
-    const StateFile f = read_state_file(state_path);
-    if (f.state.q.size() != knit.control_points.size())
-      throw std::runtime_error(state_path + ": not a " + pattern + " " + std::to_string(rows) +
-                               "x" + std::to_string(cols) + " sample");
-    knit.control_points =
-        Eigen::Map<const Eigen::Matrix3Xd>(f.state.q.data(), 3, f.state.q.size() / 3);
-    s.relaxed = true;
-  }
   Params p = Params::simulation();
-  p.contact_points = contact_points;
-  const Model model = build_knit_model(knit, p);
-  s.sim = std::make_unique<Simulator>(model);
-  s.sim->add_filter(std::make_unique<NonRigidDampingFilter>(model, p.alpha_small, p.alpha_large));
-  s.state.q =
-      Eigen::Map<const Eigen::VectorXd>(knit.control_points.data(), knit.control_points.size());
-  s.state.v = Eigen::VectorXd::Zero(s.state.q.size());
+  p.discretisation.contact_points = contact_points;
+  StepSetup s;
+  s.pattern = pattern;
+  s.rows = rows;
+  s.cols = cols;
+  if (!state_path.empty()) {
+    Scene scene = scene_from_knit_state(state_path, p);
+    s.sim = make_scene_simulator(scene);
+    s.state = scene.state;
+    s.relaxed = true;
+    const StateFile f = read_state_file(state_path);
+    if (f.knit) {
+      s.pattern = f.knit->pattern;
+      s.rows = f.knit->rows;
+      s.cols = f.knit->cols;
+    }
+  } else {
+    KnitOptions ko;
+    ko.rows = rows;
+    ko.cols = cols;
+    const GeneratedKnit knit = generate_knit(load_pattern(pattern), ko);
+    const Model model = build_knit_model(knit, p);
+    s.sim = std::make_unique<Simulator>(model);
+    s.sim->add_filter(std::make_unique<NonRigidDampingFilter>(model, p.material.alpha_small,
+                                                              p.material.alpha_large));
+    s.state.q =
+        Eigen::Map<const Eigen::VectorXd>(knit.control_points.data(), knit.control_points.size());
+    s.state.v = Eigen::VectorXd::Zero(s.state.q.size());
+  }
   s.sim->satisfy_constraints(s.state);
   return s;
 }
 
 /// Steps `steps` times (after `warmup` untimed steps) and returns timings as JSON:
-/// us_per_segment_step, ms_per_step, seconds per stage, contact pairs per step.
-nlohmann::json time_steps(StepSetup& s, int warmup, int steps, double h);
-
-}  // namespace knit::bench
-
-#include "knit/contact/contact_term.hpp"
-
-namespace knit::bench {
-
+/// us_per_segment_step, ms_per_step, seconds per stage, contact pairs per step — all read
+/// from the simulator's step data.
 inline nlohmann::json time_steps(StepSetup& s, int warmup, int steps, double h) {
   Simulator& sim = *s.sim;
   for (int i = 0; i < warmup; ++i)
     if (!sim.step(s.state, h).ok()) throw std::runtime_error("warm-up step failed");
   sim.reset_timings();
-  const auto* contact = dynamic_cast<const ContactTerm*>(sim.find_term("contact"));
+  const StepData& data = sim.data();
   double pairs = 0;
   int iterations = 0;
   const double t0 = now_s();
   for (int i = 0; i < steps; ++i) {
     const StepResult r = sim.step(s.state, h);
     if (!r.ok()) throw std::runtime_error("step failed: " + r.message);
-    iterations += r.projection.iterations;
-    if (contact) pairs += static_cast<double>(contact->last_stats().point_pairs_in_contact);
+    iterations += data.projection.iterations;
+    pairs += static_cast<double>(data.contact.point_pairs_in_contact);
   }
   const double wall = now_s() - t0;
   const int nseg = sim.model().num_seg();
   nlohmann::json stages = nlohmann::json::object();
   double other = 0;
-  for (const auto& [name, sec] : sim.stage_seconds()) {
+  for (const auto& [name, sec] : data.stage_seconds) {
     stages[name + "_s_per_step"] = sec / steps;
-    if (name != "contact" && name != "projection" && name != "nonrigid_damping") other += sec;
+    if (name != "contact" && name != "projection" && name != "nonrigid_damping" && name != "record")
+      other += sec;
   }
-  const auto& st = sim.stage_seconds();
+  const auto& st = data.stage_seconds;
   auto get = [&](const char* k) { return st.count(k) ? st.at(k) : 0.0; };
   const double total = wall;
   return {{"segments", nseg},
-          {"contact_points_per_segment", sim.model().params.contact_points},
+          {"contact_points_per_segment", sim.model().params.discretisation.contact_points},
           {"threads", active_threads()},
           {"steps", steps},
           {"time_step_s", h},
@@ -168,7 +174,8 @@ inline nlohmann::json time_steps(StepSetup& s, int warmup, int steps, double h) 
            {{"yarn_contact", get("contact") / total},
             {"other_energies", other / total},
             {"constraints", get("projection") / total},
-            {"velocity_filters", get("nonrigid_damping") / total}}},
+            {"velocity_filters", get("nonrigid_damping") / total},
+            {"step_data_records", get("record") / total}}},
           {"stages", stages}};
 }
 

@@ -1,13 +1,10 @@
-// knitsim simulate SCENE.json --out DIR
-#include <tbb/global_control.h>
-
+// knitsim simulate SCENE.json --out DIR: a thin adapter over the simulate_scene recipe.
 #include <iostream>
 #include <memory>
 
 #include "commands.hpp"
 #include "common.hpp"
-#include "knit/scene/scene.hpp"
-#include "knit/solver/runner.hpp"
+#include "knit/recipes/simulate_scene.hpp"
 
 namespace knitsim {
 
@@ -16,13 +13,15 @@ void register_simulate(CLI::App& app) {
     std::string scene, out;
     int threads = 0;
     double duration = -1;
-    bool quiet = false;
+    bool quiet = false, overwrite = false;
     std::string export_format;
   };
   auto opts = std::make_shared<Opts>();
   CLI::App* cmd = app.add_subcommand("simulate", "run a scene file (JSON) and write its states");
   cmd->add_option("scene", opts->scene, "scene file (JSON)")->required();
   cmd->add_option("--out,-o", opts->out, "output directory")->required();
+  cmd->add_flag("--overwrite", opts->overwrite,
+                "replace the files of an earlier run in the output directory");
   add_threads_option(cmd, opts->threads);
   cmd->add_option("--duration", opts->duration, "override the scene's duration (s)");
   cmd->add_flag("--quiet,-q", opts->quiet, "no progress line");
@@ -32,15 +31,12 @@ void register_simulate(CLI::App& app) {
     knit::Scene scene = knit::load_scene(opts->scene);
     if (opts->duration >= 0) scene.duration = opts->duration;
     auto control = make_thread_control(opts->threads);
-    knit::Simulator sim(scene.model);
-    knit::RunOptions run;
-    run.time_step = scene.time_step;
-    run.duration = scene.duration;
-    run.output_every = scene.output_every;
+    knit::SimulateOptions run;
     run.out_dir = opts->out;
+    run.overwrite = opts->overwrite;
     run.progress = !opts->quiet;
     run.extra["scene"] = opts->scene;
-    const knit::RunReport report = knit::run_simulation(sim, scene.state, run);
+    const knit::RunReport report = knit::simulate_scene(scene, run);
     print_report(report, opts->out);
     export_run(opts->out, opts->export_format);
     if (report.status != knit::StepStatus::OK) throw RunFailed();

@@ -38,7 +38,7 @@ TEST(FabricShape, FlatSheetHasKnownSpacingAndNoCurl) {
   EXPECT_NEAR(s.wale_extent_cm, 11 * 0.4, 1e-6);
   EXPECT_NEAR(s.course_length_cm, 10 * 0.5, 1e-9);
   EXPECT_NEAR(s.wale_length_cm, 12 * 0.4, 1e-9);
-  EXPECT_NEAR(s.thickness_cm, 2 * m.params.radius, 1e-9);
+  EXPECT_NEAR(s.thickness_cm, 2 * m.params.material.radius, 1e-9);
   EXPECT_NEAR(s.edge_curl, 0.0, 1e-9);
 }
 
@@ -56,7 +56,7 @@ TEST(FabricShape, PleatedSheetMeasuresItsProjectedGauge) {
   EXPECT_NEAR(s.stitch_width_cm, w * std::cos(theta), 1e-9);
   EXPECT_NEAR(s.row_height_cm, 0.4, 1e-9);
   EXPECT_NEAR(s.course_length_cm, 12 * w * std::cos(theta), 0.05 * w);
-  EXPECT_GT(s.thickness_cm, 2 * m.params.radius + 0.5 * w * std::sin(theta));
+  EXPECT_GT(s.thickness_cm, 2 * m.params.material.radius + 0.5 * w * std::sin(theta));
 }
 
 TEST(FabricShape, MeasuresAreRotationInvariant) {

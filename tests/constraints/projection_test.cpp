@@ -45,13 +45,14 @@ TEST(Projection, ConvergesFromPerturbedStateWithinFiveIterations) {
   b.add_pin({{0, 0.0}, Eigen::Vector3d::Zero()});
   Model m = b.build(Params{});
   m.pins[0].origin = point_position(m, b.positions(), m.pins[0].at);
+  build_constraint_groups(m);  // the groups hold copies of the pins
   FastProjection proj(m);
   Eigen::VectorXd q = test::jitter(b.positions(), 0.03, 17);
   ASSERT_GT(proj.max_violation(m, q, 0.0), 1e-2);
   const ProjectionResult r = proj.project(m, q, 0.0);
   EXPECT_TRUE(r.converged);
   EXPECT_LE(r.iterations, 5);
-  EXPECT_LT(proj.max_violation(m, q, 0.0), m.params.constraint_tolerance);
+  EXPECT_LT(proj.max_violation(m, q, 0.0), m.params.solver.constraint_tolerance);
 }
 
 // Inextensibility constraints are internal: their gradients sum to zero over a yarn's
@@ -86,6 +87,7 @@ TEST(Projection, GlueAndMovingPinAreSatisfied) {
   b.add_glue({{17 + 10, 0.5}, {10, 0.5}});  // yarn 1 segment 10 onto yarn 0 segment 10
   Model m = b.build(Params{});
   m.pins[0].origin = point_position(m, b.positions(), {0, 0.0});
+  build_constraint_groups(m);  // the groups hold copies of the pins
   FastProjection proj(m);
   Eigen::VectorXd q = b.positions();
   const ProjectionResult r = proj.project(m, q, 0.05);  // pin target moved 0.05 cm
@@ -105,7 +107,7 @@ double max_abs_of(const Eigen::VectorXd& v) {
 // constraint kernels and the basis, A = G M⁻¹ Gᵀ as a dense product (with the same relative
 // ridge), dense LDLᵀ. Returns the iterations taken.
 int dense_projection(const Model& m, Eigen::VectorXd& q, double time) {
-  const int len_rows = m.params.length_constraints ? m.num_seg() : 0;
+  const int len_rows = m.params.solver.length_constraints ? m.num_seg() : 0;
   const int rows = len_rows + 3 * static_cast<int>(m.pins.size() + m.glues.size());
   auto constraints = [&](const Eigen::VectorXd& x, Eigen::MatrixXd& g) {
     Eigen::VectorXd c(rows);
@@ -138,7 +140,7 @@ int dense_projection(const Model& m, Eigen::VectorXd& q, double time) {
   Eigen::MatrixXd g;
   Eigen::VectorXd c = constraints(q, g);
   int iterations = 0;
-  while (max_abs_of(c) > m.params.constraint_tolerance && iterations < 20) {
+  while (max_abs_of(c) > m.params.solver.constraint_tolerance && iterations < 20) {
     Eigen::MatrixXd a = g * m.inv_mass3.asDiagonal() * g.transpose();
     a.diagonal().array() += 1e-12 * max_abs_of(a.diagonal());
     const Eigen::VectorXd dlambda = a.ldlt().solve(c);
@@ -165,6 +167,7 @@ TEST(Projection, MatchesDenseOracle) {
     b.add_glue({{2, 0.9}, {3, 0.1}});  // two points of neighbouring segments of one yarn
     Model m = b.build(Params{});
     m.pins[0].origin = point_position(m, b.positions(), m.pins[0].at);
+    build_constraint_groups(m);  // the groups hold copies of the pins
     const Eigen::VectorXd q0 = test::jitter(b.positions(), 0.02, seed);
     Eigen::VectorXd q_fast = q0, q_dense = q0;
     FastProjection proj(m);

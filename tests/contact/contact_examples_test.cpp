@@ -58,8 +58,8 @@ Loaded load(const std::string& name) {
   Params params;
   if (out.doc.contains("params")) {
     const auto& p = out.doc["params"];
-    if (p.contains("radius")) params.radius = p["radius"];
-    if (p.contains("contact_points")) params.contact_points = p["contact_points"];
+    if (p.contains("radius")) params.material.radius = p["radius"];
+    if (p.contains("contact_points")) params.discretisation.contact_points = p["contact_points"];
   }
   ModelBuilder builder;
   for (const auto& yarn : out.doc.at("yarns")) builder.add_yarn(yarn_control_points(yarn));
@@ -80,7 +80,7 @@ double min_distance_ratio(const Model& m, const Eigen::VectorXd& q) {
           best = std::min(
               best, (combine(xj, m.contact_quad.b[b]) - combine(xi, m.contact_quad.b[a])).norm());
     }
-  return best / (2 * m.params.radius);
+  return best / (2 * m.params.material.radius);
 }
 
 class ContactExamples : public ::testing::TestWithParam<std::string> {};
@@ -128,7 +128,7 @@ TEST(ContactExamples, OverhandKnotStartsLoose) {
           far = std::min(far, (combine(gather_segment(s.q, m.seg_cp[j]), m.contact_quad.b[b]) -
                                combine(gather_segment(s.q, m.seg_cp[i]), m.contact_quad.b[a]))
                                   .norm());
-  EXPECT_GE(far / (2 * m.params.radius), 2.0);
+  EXPECT_GE(far / (2 * m.params.material.radius), 2.0);
 }
 
 }  // namespace

@@ -36,8 +36,8 @@ double min_ratio(const Vector12d& xi, const Vector12d& xj, const Params& p) {
   double m = std::numeric_limits<double>::infinity();
   for (int a = 0; a < quad10().size(); ++a)
     for (int b = 0; b < quad10().size(); ++b)
-      m = std::min(
-          m, (combine(xj, quad10().b[b]) - combine(xi, quad10().b[a])).norm() / (2 * p.radius));
+      m = std::min(m, (combine(xj, quad10().b[b]) - combine(xi, quad10().b[a])).norm() /
+                          (2 * p.material.radius));
   return m;
 }
 
@@ -50,7 +50,7 @@ std::pair<Vector12d, Vector12d> crossing(double target, const Params& p, double 
   for (int a = 0; a < quad10().size(); ++a)
     for (int b = 0; b < quad10().size(); ++b)
       m2 = std::min(m2, (combine(flat, quad10().b[b]) - combine(xi, quad10().b[a])).squaredNorm());
-  const double dz = std::sqrt(std::pow(target * 2 * p.radius, 2) - m2);
+  const double dz = std::sqrt(std::pow(target * 2 * p.material.radius, 2) - m2);
   Vector12d xj = flat;
   for (int a = 0; a < 4; ++a) xj[3 * a + 2] += dz;
   return {xi, xj};
@@ -145,7 +145,7 @@ TEST(ContactKernel, ContactExactlyAtActivationDistance) {
   ASSERT_NEAR(min_ratio(xi, xj, p), 1.0, 1e-12);
   Vector12d gi, gj;
   const double e = contact_pair_gradient(xi, xj, 0.3, 0.3, p, quad10(), gi, gj);
-  const double kl = p.k_contact * 0.3 * 0.3;
+  const double kl = p.material.k_contact * 0.3 * 0.3;
   EXPECT_LE(e, 1e-20 * kl);
   EXPECT_LE(gi.norm() + gj.norm(), 1e-8 * kl);
   // finite differences straddle the cut-off (f is C¹ there, f'' jumps)
@@ -155,7 +155,7 @@ TEST(ContactKernel, ContactExactlyAtActivationDistance) {
   expect_gradient_matches(energy, xi, xj, gi, gj, 1e-7, 0.0, 1e-5 * kl, "at d = 1");
   // parallel segments exactly 2r apart: every aligned point pair sits at d = 1
   const Vector12d yi = straight({0, 0, 0}, {1, 0, 0}, 0.3);
-  const Vector12d yj = straight({0, 0, 2 * p.radius}, {1, 0, 0}, 0.3);
+  const Vector12d yj = straight({0, 0, 2 * p.material.radius}, {1, 0, 0}, 0.3);
   EXPECT_LE(contact_pair_gradient(yi, yj, 0.3, 0.3, p, quad10(), gi, gj), 1e-20 * kl);
   EXPECT_LE(gi.norm() + gj.norm(), 1e-6 * kl);
 }

@@ -84,7 +84,7 @@ TEST(ContactTerm, NameAndEmptyStats) {
 
 TEST(ContactTerm, RejectsTooManyContactPoints) {
   Params p;
-  p.contact_points = ContactTerm::MAX_CONTACT_POINTS + 1;
+  p.discretisation.contact_points = ContactTerm::MAX_CONTACT_POINTS + 1;
   EXPECT_THROW(ContactTerm(make(knit_like_sample(1, 1, 8, 0.125), p).model), std::invalid_argument);
 }
 
@@ -172,7 +172,7 @@ TEST(ContactTerm, BvhMatchesBruteForceOnKnitSample) {
 TEST(ContactTerm, BvhMatchesBruteForceAfterRefit) {
   // the tree is built on one configuration, then refit on a strongly moved one
   Params p;
-  p.contact_points = 16;
+  p.discretisation.contact_points = 16;
   const Sample s0 = make(random_tangle(3, 30, 3.0, 9), p);
   Sample s = s0;
   s.q += random_vector(s.q.size(), 0.3, 10);
@@ -186,8 +186,8 @@ TEST(ContactTerm, BvhMatchesBruteForceWithOddPointCountsAndWithoutDamping) {
   for (int points : {1, 3, 7, 13, 20}) {
     for (bool damping : {true, false}) {
       Params p;
-      p.contact_points = points;
-      if (!damping) p.k_dt = p.k_dn = 0;
+      p.discretisation.contact_points = points;
+      if (!damping) p.material.k_dt = p.material.k_dn = 0;
       const Sample s = make(random_tangle(3, 25, 2.5, 30 + points), p);
       const Eigen::VectorXd v = random_vector(s.q.size(), 3.0, 50 + points);
       expect_bvh_matches_brute(
@@ -347,7 +347,7 @@ TEST(ContactTerm, PushedYarnsNeverComeCloserThanHalfTheContactDistance) {
   // pinned yarn it would slide off sideways), from rest at d = 1.05; symplectic Euler with
   // only the contact term (energy + damping) and the push
   const Params p;
-  const double two_r = 2 * p.radius;
+  const double two_r = 2 * p.material.radius;
   const double half_gap = 0.51 * two_r;  // bottom yarns 1.02·2r apart (centre to centre)
   const double height = std::sqrt(std::pow(1.05 * two_r, 2) - half_gap * half_gap);
   const double h = 0.3;
@@ -375,7 +375,7 @@ TEST(ContactTerm, PushedYarnsNeverComeCloserThanHalfTheContactDistance) {
     min_d = std::min(min_d, term.last_stats().min_distance_ratio);
     for (int k = first_free; k < q.size(); ++k) {
       const double m = model.mass[k / 3];
-      const double fk = f[k] + (k % 3 == 2 ? -push * m / p.density : 0.0);
+      const double fk = f[k] + (k % 3 == 2 ? -push * m / p.material.density : 0.0);
       v[k] += dt * fk / m;
     }
     q.tail(free_dofs) += dt * v.tail(free_dofs);

@@ -132,7 +132,7 @@ TEST(AssembledEnergies, GravityForceIsMinusGradient) {
 TEST(AssembledEnergies, GlobalDampingForceIsMinusVelocityGradientAndDissipates) {
   Eigen::VectorXd q;
   Model m = wavy_yarn(q);
-  m.params.k_global = 1.5;
+  m.params.material.k_global = 1.5;
   const Eigen::VectorXd v = test::jitter(Eigen::VectorXd::Zero(q.size()), 4.0, 9);
   GlobalDamping term;
   Eigen::VectorXd f = Eigen::VectorXd::Zero(q.size());
@@ -149,7 +149,7 @@ TEST(AssembledEnergies, GlobalDampingForceIsMinusVelocityGradientAndDissipates) 
   for (int k = 0; k < m.num_cp(); ++k) {
     const Eigen::Vector3d rate =
         -f.segment<3>(3 * k).cwiseQuotient(v.segment<3>(3 * k)) / m.mass[k];
-    const double expected = 2 * 1.5 / (m.params.density * m.rest_length[0] / 0.95);
+    const double expected = 2 * 1.5 / (m.params.material.density * m.rest_length[0] / 0.95);
     EXPECT_NEAR(rate.maxCoeff(), rate.minCoeff(), 1e-9 * expected) << "control point " << k;
     EXPECT_NEAR(rate[0], expected, 0.2 * expected) << "control point " << k;
   }

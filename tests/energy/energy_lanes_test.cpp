@@ -117,8 +117,8 @@ TEST(EnergyLanes, AssembledTermsMatchPlainAssembly) {
     for (int i = 0; i < m.num_seg(); ++i) {
       Vector12d g = Vector12d::Zero();
       const Vector12d x = gather_segment(q, m.seg_cp[i]);
-      e_plain += bending ? bending_kernel(x, m.rest_length[i], m.params.k_bend, m.quad, &g)
-                         : length_kernel(x, m.rest_length[i], m.params.k_len, m.quad, &g);
+      e_plain += bending ? bending_kernel(x, m.rest_length[i], m.params.material.k_bend, m.quad, &g)
+                         : length_kernel(x, m.rest_length[i], m.params.material.k_len, m.quad, &g);
       plain.segment<12>(3 * m.seg_cp[i]) -= g;
     }
     const char* what = bending ? "bending" : "length";

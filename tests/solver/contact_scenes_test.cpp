@@ -2,7 +2,6 @@
 // each other, lengths hold, and no yarn moves far enough in one step to tunnel.
 #include <gtest/gtest.h>
 
-#include "knit/contact/contact_term.hpp"
 #include "knit/scene/scene.hpp"
 #include "knit/solver/simulator.hpp"
 
@@ -19,20 +18,21 @@ struct SceneRun {
 SceneRun run_scene(const std::string& name, double duration) {
   Scene scene = load_scene(std::string(KNIT_EXAMPLES) + "/" + name);
   Simulator sim(scene.model);
-  auto* contact = dynamic_cast<ContactTerm*>(sim.find_term("contact"));
-  EXPECT_NE(contact, nullptr);
+  const StepData& data = sim.data();
   SceneRun r;
-  const int steps = static_cast<int>(std::lround(duration / scene.time_step));
+  const double h = scene.model.params.solver.time_step;
+  const int steps = static_cast<int>(std::lround(duration / h));
   for (int i = 0; i < steps; ++i) {
     const Eigen::VectorXd before = scene.state.q;
-    const StepResult res = sim.step(scene.state, scene.time_step);
+    const StepResult res = sim.step(scene.state);
     EXPECT_TRUE(res.ok()) << name << " step " << i << ": " << res.message;
     if (!res.ok()) break;
     r.max_step_travel_cm = std::max(
         r.max_step_travel_cm,
         (scene.state.q - before).reshaped(3, sim.model().num_cp()).colwise().norm().maxCoeff());
-    r.min_d = std::min(r.min_d, contact->last_stats().min_distance_ratio);
-    r.contact_steps += contact->last_stats().point_pairs_in_contact > 0;
+    EXPECT_TRUE(data.contact.present);
+    r.min_d = std::min(r.min_d, data.contact.min_distance_ratio);
+    r.contact_steps += data.contact.point_pairs_in_contact > 0;
   }
   r.max_length_violation = FastProjection::max_length_violation(sim.model(), scene.state.q);
   return r;

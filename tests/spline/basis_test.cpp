@@ -86,10 +86,11 @@ TEST(Basis, LumpedMassEqualsExactMassRowSums) {
     for (int k = 0; k < q.size(); ++k)
       for (int a = 0; a < 4; ++a)
         for (int c = 0; c < 4; ++c)
-          M(i + a, i + c) += m.params.density * m.rest_length[i] * q.w[k] * q.b[k][a] * q.b[k][c];
+          M(i + a, i + c) +=
+              m.params.material.density * m.rest_length[i] * q.w[k] * q.b[k][a] * q.b[k][c];
   for (int k = 0; k < n; ++k) EXPECT_NEAR(M.row(k).sum(), m.mass[k], 1e-9) << "control point " << k;
   // total mass is μ × total length
-  EXPECT_NEAR(m.mass.sum(), m.params.density * m.total_length(), 1e-12);
+  EXPECT_NEAR(m.mass.sum(), m.params.material.density * m.total_length(), 1e-12);
 }
 
 }  // namespace

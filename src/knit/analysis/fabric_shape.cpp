@@ -145,7 +145,7 @@ FabricShape measure_fabric(const Model& model, const Eigen::VectorXd& q) {
   }
   s.course_extent_cm = cmax - cmin;
   s.wale_extent_cm = wmax - wmin;
-  s.thickness_cm = (nmax - nmin) + 2 * model.params.radius;
+  s.thickness_cm = (nmax - nmin) + 2 * model.params.material.radius;
   s.loop_length_cm = model.total_length() / (static_cast<double>(R) * C);
 
   // edges: mean signed offset of their centroids from the central plane

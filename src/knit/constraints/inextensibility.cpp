@@ -1,6 +1,10 @@
 #include "knit/constraints/inextensibility.hpp"
 
+#include <tbb/parallel_for.h>
+
 #include <cmath>
+
+#include "knit/model/model.hpp"
 
 namespace knit {
 
@@ -16,6 +20,31 @@ double length_constraint(const Vector12d& x, double rest_length, const Quadratur
     if (grad) scatter(*grad, quad.db[k], (-quad.w[k] * inv_l / speed) * d1);
   }
   return 1.0 - len * inv_l;
+}
+
+LengthGroup::LengthGroup(const Model& model) : ConstraintGroup("length"), m_rows(model.num_seg()) {}
+
+void LengthGroup::jacobian_structure(const Model& model,
+                                     std::vector<Eigen::Triplet<double>>& entries) const {
+  for (int i = 0; i < m_rows; ++i)
+    for (int k = 0; k < 12; ++k) entries.emplace_back(i, 3 * model.seg_cp[i] + k, 1.0);
+}
+
+void LengthGroup::evaluate(const Model& model, const Eigen::VectorXd& q, double time, double* c,
+                           double* jacobian) const {
+  tbb::parallel_for(tbb::blocked_range<int>(0, m_rows, 256), [&](const auto& r) {
+    Vector12d g;
+    for (int i = r.begin(); i < r.end(); ++i) {
+      const Vector12d x = gather_segment(q, model.seg_cp[i]);
+      if (!jacobian) {
+        c[i] = length_constraint(x, model.rest_length[i], model.quad, nullptr);
+        continue;
+      }
+      c[i] = length_constraint(x, model.rest_length[i], model.quad, &g);
+      // row i holds its 12 columns 3·cp … 3·cp+11 in ascending order
+      for (int k = 0; k < 12; ++k) jacobian[12 * i + k] = g[k];
+    }
+  });
 }
 
 }  // namespace knit

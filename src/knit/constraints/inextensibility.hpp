@@ -1,6 +1,9 @@
 #pragma once
 // Inextensibility constraint, one scalar per segment (MODEL.md §5.1, paper eq. 5):
 //   C_i = 1 − (1/ℓ_i) ∫₀¹ |y_i'(t)| dt      (dimensionless)
+// Its multiplier λ_i (g·cm², summed over a step's projection iterations) is the segment's
+// tension impulse: the force along the yarn is of order λ_i / (ℓ_i h²).
+#include "knit/constraints/group.hpp"
 #include "knit/spline/basis.hpp"
 
 namespace knit {
@@ -8,5 +11,22 @@ namespace knit {
 /// C_i for control points `x`; writes ∂C_i/∂x into *grad (overwrites) when non-null.
 double length_constraint(const Vector12d& x, double rest_length, const QuadratureTable& quad,
                          Vector12d* grad);
+
+/// Every segment's C_i as one group ("length"), row i = segment i. Its rows exert no net
+/// force or torque on a yarn (arclength is invariant under rigid motion).
+class LengthGroup : public ConstraintGroup {
+ public:
+  explicit LengthGroup(const Model& model);
+  std::string_view kind() const override { return "length"; }
+  int rows() const override { return m_rows; }
+  void jacobian_structure(const Model& model,
+                          std::vector<Eigen::Triplet<double>>& entries) const override;
+  bool jacobian_varies() const override { return true; }
+  void evaluate(const Model& model, const Eigen::VectorXd& q, double time, double* c,
+                double* jacobian) const override;
+
+ private:
+  int m_rows = 0;
+};
 
 }  // namespace knit

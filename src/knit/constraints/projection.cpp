@@ -30,31 +30,20 @@ double max_abs(const Eigen::VectorXd& v) {
 }  // namespace
 
 FastProjection::FastProjection(const Model& model) {
-  m_len_rows = model.params.length_constraints ? model.num_seg() : 0;
-  m_rows = m_len_rows + 3 * static_cast<int>(model.pins.size() + model.glues.size());
-  std::vector<Eigen::Triplet<double>> trip;
-  // inextensibility rows: structure only, values filled by update_jacobian
-  for (int i = 0; i < m_len_rows; ++i)
-    for (int k = 0; k < 12; ++k) trip.emplace_back(i, 3 * model.seg_cp[i] + k, 1.0);
-  int row = m_len_rows;
-  auto add_point = [&](int r, const YarnPoint& p, double sign) {
-    const Eigen::Vector4d b = bspline_basis(p.t);
-    for (int a = 0; a < 4; ++a)
-      for (int c = 0; c < 3; ++c)
-        trip.emplace_back(r + c, 3 * (model.seg_cp[p.segment] + a) + c, sign * b[a]);
-  };
-  for (const Pin& pin : model.pins) {
-    add_point(row, pin.at, 1.0);
-    row += 3;
+  std::vector<Eigen::Triplet<double>> trip, group_trip;
+  m_group_row.push_back(0);
+  for (const auto& group : model.constraint_groups) {
+    const int row0 = m_group_row.back();
+    group_trip.clear();
+    group->jacobian_structure(model, group_trip);
+    for (const auto& t : group_trip) trip.emplace_back(row0 + t.row(), t.col(), t.value());
+    m_group_row.push_back(row0 + group->rows());
   }
-  for (const Glue& glue : model.glues) {
-    add_point(row, glue.a, 1.0);
-    add_point(row, glue.b, -1.0);  // duplicates (shared control points) are summed
-    row += 3;
-  }
+  m_rows = m_group_row.back();
   m_G.resize(m_rows, model.num_dof());
-  m_G.setFromTriplets(trip.begin(), trip.end());
+  m_G.setFromTriplets(trip.begin(), trip.end());  // duplicates (shared control points) summed
   m_G.makeCompressed();
+  m_lambda = Eigen::VectorXd::Zero(m_rows);
   build_normal_pattern(model.num_dof());
 }
 
@@ -170,41 +159,57 @@ void FastProjection::evaluate(const Model& model, const Eigen::VectorXd& q, doub
   evaluate_impl(model, q, time, c, false);
 }
 
-// C(q); with `jacobian`, the inextensibility rows of G at q too (the pin and glue rows
-// are constant), from the same kernel call
+// C(q); with `jacobian`, the values of the rows of G whose gradient varies, at q too, from
+// the same group call (the other rows are constant). A group's rows are contiguous in the
+// row-major G, so its values are too.
 void FastProjection::evaluate_impl(const Model& model, const Eigen::VectorXd& q, double time,
                                    Eigen::VectorXd& c, bool jacobian) {
   c.resize(m_rows);
   double* values = m_G.valuePtr();
   const int* outer = m_G.outerIndexPtr();
-  tbb::parallel_for(tbb::blocked_range<int>(0, m_len_rows, 256), [&](const auto& r) {
-    Vector12d g;
-    for (int i = r.begin(); i < r.end(); ++i) {
-      const Vector12d x = gather_segment(q, model.seg_cp[i]);
-      if (!jacobian) {
-        c[i] = length_constraint(x, model.rest_length[i], model.quad, nullptr);
-        continue;
-      }
-      c[i] = length_constraint(x, model.rest_length[i], model.quad, &g);
-      // row i holds its 12 columns 3·cp … 3·cp+11 in ascending order
-      for (int k = 0; k < 12; ++k) values[outer[i] + k] = g[k];
-    }
-  });
-  int row = m_len_rows;
-  for (const Pin& pin : model.pins) {
-    c.segment<3>(row) = point_position(model, q, pin.at) - pin.target(time);
-    row += 3;
-  }
-  for (const Glue& glue : model.glues) {
-    c.segment<3>(row) =
-        point_position(model, q, glue.a) - point_position(model, q, glue.b) - glue.offset(time);
-    row += 3;
+  for (size_t g = 0; g < model.constraint_groups.size(); ++g) {
+    const ConstraintGroup& group = *model.constraint_groups[g];
+    const int row0 = m_group_row[g];
+    double* jac = jacobian && group.jacobian_varies() ? values + outer[row0] : nullptr;
+    group.evaluate(model, q, time, c.data() + row0, jac);
   }
 }
 
 double FastProjection::max_violation(const Model& model, const Eigen::VectorXd& q, double time) {
   evaluate(model, q, time, m_c);
   return m_rows ? max_abs(m_c) : 0.0;
+}
+
+void FastProjection::record_groups(const Model& model, const Eigen::VectorXd& q, double time,
+                                   double h, std::vector<ConstraintRecord>& records) const {
+  records.resize(model.constraint_groups.size());
+  const double* values = m_G.valuePtr();
+  const int* outer = m_G.outerIndexPtr();
+  const int* inner = m_G.innerIndexPtr();
+  const double inv_h2 = 1.0 / (h * h);
+  for (size_t g = 0; g < model.constraint_groups.size(); ++g) {
+    const ConstraintGroup& group = *model.constraint_groups[g];
+    ConstraintRecord& rec = records[g];
+    const int r0 = m_group_row[g], r1 = m_group_row[g + 1];
+    rec.name = group.name();
+    rec.kind = std::string(group.kind());
+    rec.rows = r1 - r0;
+    rec.multipliers = m_lambda.segment(r0, r1 - r0);
+    rec.max_violation = r1 > r0 ? max_abs(m_c.segment(r0, r1 - r0)) : 0.0;
+    rec.about = group.torque_point(model, q, time);
+    rec.force.setZero();
+    rec.torque.setZero();
+    // F_k = −Σ_r G_rk Λ_r / h², entry by entry
+    for (int r = r0; r < r1; ++r)
+      for (int p = outer[r]; p < outer[r + 1]; ++p) {
+        const int dof = inner[p];
+        Eigen::Vector3d f = Eigen::Vector3d::Zero();
+        f[dof % 3] = -values[p] * m_lambda[r] * inv_h2;
+        rec.force += f;
+        rec.torque += (q.segment<3>(dof - dof % 3) - rec.about).cross(f);
+      }
+    group.finish_record(rec, h);
+  }
 }
 
 double FastProjection::max_length_violation(const Model& model, const Eigen::VectorXd& q) {
@@ -217,13 +222,14 @@ double FastProjection::max_length_violation(const Model& model, const Eigen::Vec
 
 ProjectionResult FastProjection::project(const Model& model, Eigen::VectorXd& q, double time) {
   ProjectionResult res;
+  m_lambda.setZero(m_rows);
   if (m_rows == 0) return res;
-  const double tol = model.params.constraint_tolerance;
+  const double tol = model.params.solver.constraint_tolerance;
   // C and G at the current q in one pass; the last pass's G goes unused
   evaluate_impl(model, q, time, m_c, true);
   res.max_violation = max_abs(m_c);
   while (res.max_violation > tol) {
-    if (res.iterations >= model.params.max_projection_iterations ||
+    if (res.iterations >= model.params.solver.max_projection_iterations ||
         !std::isfinite(res.max_violation)) {
       res.converged = false;
       return res;
@@ -244,6 +250,7 @@ ProjectionResult FastProjection::project(const Model& model, Eigen::VectorXd& q,
     for (int r = 0; r < m_rows; ++r) m_cperm[m_perm[r]] = m_c[r];
     m_xperm = m_solver.solve(m_cperm);
     for (int r = 0; r < m_rows; ++r) m_dlambda[r] = m_xperm[m_perm[r]];
+    m_lambda += m_dlambda;
     q.noalias() -= model.inv_mass3.cwiseProduct(m_G.transpose() * m_dlambda);
     ++res.iterations;
     evaluate_impl(model, q, time, m_c, true);

@@ -1,8 +1,10 @@
 #pragma once
 // Fast projection onto the constraint manifold (MODEL.md §5.2; Goldenthal et al. 2007,
 // Algorithm 1, lumped mass): repeat  (G M⁻¹ Gᵀ) δλ = C(q_j),  q_{j+1} = q_j − M⁻¹ Gᵀ δλ
-// until max |C| < tolerance. Rows: one per segment (inextensibility, when enabled), three
-// per pin (y(s) − p(time), cm), three per glue (y(a) − y(b), cm).
+// until max |C| < tolerance. The rows are the model's constraint groups', stacked in order
+// (constraints/group.hpp): the projection knows nothing of what a group means. It sums
+// each row's δλ over the iterations into Λ, from which each group's force and torque are
+// reported (StepData's ConstraintRecord).
 //
 // Cost per iteration: one pass of the constraint kernel gives C and the rows of G at once;
 // A = G M⁻¹ Gᵀ is assembled in parallel, already in the fill-reducing (AMD) order, straight
@@ -14,7 +16,9 @@
 #include <Eigen/SparseCore>
 #include <vector>
 
+#include "knit/constraints/group.hpp"
 #include "knit/model/model.hpp"
+#include "knit/model/step_data.hpp"
 
 namespace knit {
 
@@ -32,8 +36,14 @@ class FastProjection {
   void evaluate(const Model& model, const Eigen::VectorXd& q, double time, Eigen::VectorXd& c);
   /// max |C(q)|.
   double max_violation(const Model& model, const Eigen::VectorXd& q, double time);
-  /// Projects q in place; the result says whether max |C| reached the tolerance.
+  /// Projects q in place; the result says whether max |C| reached the tolerance. The
+  /// multipliers Λ (summed over the iterations) are kept for record_groups().
   ProjectionResult project(const Model& model, Eigen::VectorXd& q, double time);
+  /// One record per constraint group of the last project(): Λ, max |C| after it, and the
+  /// force and torque −∇Cᵀ Λ / h² the group exerted over a step of h seconds, with ∇C as
+  /// last evaluated and torques about the group's point at (q, time).
+  void record_groups(const Model& model, const Eigen::VectorXd& q, double time, double h,
+                     std::vector<ConstraintRecord>& records) const;
   /// Largest |C_i| over the inextensibility rows alone (0 when there are none).
   static double max_length_violation(const Model& model, const Eigen::VectorXd& q);
 
@@ -46,8 +56,9 @@ class FastProjection {
                      bool jacobian);
   void build_normal_pattern(int num_dof);
   void assemble_normal_matrix(const Model& model);
-  int m_len_rows = 0;
   int m_rows = 0;
+  std::vector<int> m_group_row;  // first row of each group (and m_rows at the end)
+  Eigen::VectorXd m_lambda;      // Λ of the last projection
   Eigen::SparseMatrix<double, Eigen::RowMajor> m_G;
   // Â = P G M⁻¹ Gᵀ Pᵀ (+ ridge), upper triangle, fixed pattern; P is the AMD ordering
   Eigen::SparseMatrix<double> m_A;

@@ -27,8 +27,8 @@ DenseOut dense_pair(const Vector12d& xi, const Vector12d& xj, const Vector12d* v
                     const QuadratureTable& quad, Want want) {
   DenseOut out;
   const int n = quad.size();
-  const double two_r = 2.0 * params.radius;
-  const double kl = params.k_contact * li * lj;
+  const double two_r = 2.0 * params.material.radius;
+  const double kl = params.material.k_contact * li * lj;
   std::vector<Eigen::Vector3d> yi(n), yj(n), ui(n), uj(n);
   for (int a = 0; a < n; ++a) {
     yi[a] = combine(xi, quad.b[a]);
@@ -59,11 +59,12 @@ DenseOut dense_pair(const Vector12d& xi, const Vector12d& xj, const Vector12d* v
         const Eigen::Vector3d dv = uj[b] - ui[a];
         const double vn = nhat.dot(dv);
         const double lw = li * lj * ww;
-        out.damping +=
-            lw * (params.k_dt * dv.squaredNorm() - (params.k_dt - params.k_dn) * vn * vn);
+        out.damping += lw * (params.material.k_dt * dv.squaredNorm() -
+                             (params.material.k_dt - params.material.k_dn) * vn * vn);
         if (want.damping_force) {
           const Eigen::Vector3d fj =
-              (-2.0 * lw) * (params.k_dt * dv - (params.k_dt - params.k_dn) * vn * nhat);
+              (-2.0 * lw) * (params.material.k_dt * dv -
+                             (params.material.k_dt - params.material.k_dn) * vn * nhat);
           scatter(out.damp_j, quad.b[b], fj);
           scatter(out.damp_i, quad.b[a], -fj);
         }

@@ -33,16 +33,17 @@ using lanes::VecD;
 using lanes::VecL;
 
 bool has_damping(const Model& model, const Eigen::VectorXd& q, const Eigen::VectorXd& v) {
-  return v.size() == q.size() && (model.params.k_dt != 0 || model.params.k_dn != 0);
+  return v.size() == q.size() &&
+         (model.params.material.k_dt != 0 || model.params.material.k_dn != 0);
 }
 
 }  // namespace
 
 ContactTerm::ContactTerm(const Model& model, ContactCulling culling)
-    : m_culling(culling), m_margin(DEFAULT_MARGIN_RADII * model.params.radius) {
-  const int points = model.params.contact_points;
+    : m_culling(culling), m_margin(DEFAULT_MARGIN_RADII * model.params.material.radius) {
+  const int points = model.params.discretisation.contact_points;
   if (points < 1 || points > MAX_CONTACT_POINTS)
-    throw std::invalid_argument("params.contact_points: expected 1 to " +
+    throw std::invalid_argument("params.discretisation.contact_points: expected 1 to " +
                                 std::to_string(MAX_CONTACT_POINTS) +
                                 " contact points per segment, got " + std::to_string(points));
   resize(model);
@@ -89,6 +90,7 @@ double ContactTerm::add_force(const Model& model, const Eigen::VectorXd& q,
   m_timings = ContactTimings{};
   m_point_pairs.clear();
   ++m_evaluations;
+  m_radius = model.params.material.radius;
   const auto t0 = Clock::now();
   const double energy = m_culling == ContactCulling::BVH ? add_force_bvh(model, q, v, force)
                                                          : add_force_brute(model, q, v, force);
@@ -99,7 +101,7 @@ double ContactTerm::add_force(const Model& model, const Eigen::VectorXd& q,
 void ContactTerm::tabulate_points(const Model& model, const Eigen::VectorXd& q,
                                   const Eigen::VectorXd& v) {
   const QuadratureTable& quad = model.contact_quad;
-  const double r = model.params.radius;
+  const double r = model.params.material.radius;
   const int P = m_points;
   const bool with_v = has_damping(model, q, v);
   const bool check_motion = m_list_valid && m_culling == ContactCulling::BVH;
@@ -170,7 +172,7 @@ void ContactTerm::pair_kernel(const Model& model, int i, int j, RowStats& row) {
   const int P = m_points;
   const Params& prm = model.params;
   const QuadratureTable& quad = model.contact_quad;
-  const double r = prm.radius;
+  const double r = prm.material.radius;
   const double four_r2 = 4.0 * r * r;
   const double inv_four_r2 = 1.0 / four_r2;
   const size_t bi = static_cast<size_t>(i) * P, bj = static_cast<size_t>(j) * P;
@@ -206,8 +208,8 @@ void ContactTerm::pair_kernel(const Model& model, int i, int j, RowStats& row) {
   }
 
   const double li = model.rest_length[i], lj = model.rest_length[j];
-  const double kl = prm.k_contact * li * lj;
-  const double kdt = prm.k_dt, kdiff = prm.k_dt - prm.k_dn;
+  const double kl = prm.material.k_contact * li * lj;
+  const double kdt = prm.material.k_dt, kdiff = prm.material.k_dt - prm.material.k_dn;
   // forces on the surviving points of j (fb*); those on the points of i go straight into
   // gi* = Σ_a B(t_a) f_a per axis (the 4 control points of segment i in the lanes)
   static_assert(LANES == 4, "the basis scatter keeps the 4 control points in one vector");
@@ -220,6 +222,7 @@ void ContactTerm::pair_kernel(const Model& model, int i, int j, RowStats& row) {
   const VecD four_r2_v = splat(four_r2), inv_four_r2_v = splat(inv_four_r2);
   const VecD zero = splat(0.0), one = splat(1.0), two = splat(2.0);
   VecD energy = zero, min_d2 = splat(std::numeric_limits<double>::infinity());
+  VecD mdx = zero, mdy = zero, mdz = zero;  // Δy of the closest point pair, lane-wise
   VecL contacts = VecL{};
   for (int ka = 0; ka < na; ++ka) {
     const int a = ia[ka];
@@ -266,7 +269,11 @@ void ContactTerm::pair_kernel(const Model& model, int i, int j, RowStats& row) {
       fy = in ? fy : zero;
       fz = in ? fz : zero;
       contacts -= in;  // a true comparison is −1
-      min_d2 = d2 < min_d2 ? d2 : min_d2;
+      const VecL closer = d2 < min_d2;
+      mdx = closer ? dx : mdx;
+      mdy = closer ? dy : mdy;
+      mdz = closer ? dz : mdz;
+      min_d2 = closer ? d2 : min_d2;
       store(fbx + kb, load(fbx + kb) + fx);
       store(fby + kb, load(fby + kb) + fy);
       store(fbz + kb, load(fbz + kb) + fz);
@@ -300,6 +307,12 @@ void ContactTerm::pair_kernel(const Model& model, int i, int j, RowStats& row) {
   }
   PairForce& pf = m_pairs[i].emplace_back();
   pf.j = j;
+  pf.min_d2 = lane_min;
+  for (int l = 0; l < LANES; ++l)
+    if (min_d2[l] == lane_min) {
+      pf.delta = Eigen::Vector3d(mdx[l], mdy[l], mdz[l]);
+      break;
+    }
   for (int c = 0; c < 4; ++c) {
     pf.force_i[3 * c] = gix[c];
     pf.force_i[3 * c + 1] = giy[c];
@@ -340,7 +353,8 @@ double ContactTerm::add_force_bvh(const Model& model, const Eigen::VectorXd& q,
   // header: the reused list gives the same forces bitwise)
   const double half_margin = 0.5 * m_margin;
   const bool rebuild = !m_list_valid || m_list_model != &model ||
-                       m_list_radius != model.params.radius || !(m_list_moved <= half_margin);
+                       m_list_radius != model.params.material.radius ||
+                       !(m_list_moved <= half_margin);
   m_stats.candidates_rebuilt = rebuild;
   m_rebuilds += rebuild;
   if (rebuild) {
@@ -374,7 +388,7 @@ double ContactTerm::add_force_bvh(const Model& model, const Eigen::VectorXd& q,
     m_timings.traverse = seconds_since(t);
     m_list_valid = true;
     m_list_model = &model;
-    m_list_radius = model.params.radius;
+    m_list_radius = model.params.material.radius;
   }
 
   // point-pair kernels, each pair (i < j) once, owned by row i
@@ -423,11 +437,36 @@ double ContactTerm::add_force_bvh(const Model& model, const Eigen::VectorXd& q,
     min_d2 = std::min(min_d2, row.min_d2);
   }
   if (std::isfinite(min_d2))
-    m_stats.min_distance_ratio = std::sqrt(min_d2) / (2 * model.params.radius);
+    m_stats.min_distance_ratio = std::sqrt(min_d2) / (2 * model.params.material.radius);
   if (m_record)
     for (const auto& rec : m_row_records)
       m_point_pairs.insert(m_point_pairs.end(), rec.begin(), rec.end());
   return energy;
+}
+
+void ContactTerm::record(StepData& data) const {
+  ContactRecord& c = data.contact;
+  c.present = true;
+  c.candidate_segment_pairs = m_stats.candidate_segment_pairs;
+  c.point_pairs_tested = m_stats.point_pairs_tested;
+  c.point_pairs_in_contact = m_stats.point_pairs_in_contact;
+  c.min_distance_ratio = m_stats.min_distance_ratio;
+  c.candidates_rebuilt = m_stats.candidates_rebuilt;
+  c.pairs.clear();
+  if (m_culling != ContactCulling::BVH) return;
+  const double inv_two_r = 1.0 / (2 * m_radius);
+  for (int i = 0; i < m_num_seg && i < static_cast<int>(m_pairs.size()); ++i)
+    for (const PairForce& pf : m_pairs[i]) {
+      ContactPairRecord& r = c.pairs.emplace_back();
+      r.seg_i = i;
+      r.seg_j = pf.j;
+      const double len = pf.delta.norm();
+      r.d = std::sqrt(pf.min_d2) * inv_two_r;
+      r.normal = len > 0 ? Eigen::Vector3d(pf.delta / len) : Eigen::Vector3d::Zero();
+      Eigen::Vector3d net = Eigen::Vector3d::Zero();
+      for (int a = 0; a < 4; ++a) net += pf.force_j.segment<3>(3 * a);
+      r.normal_force = r.normal.dot(net);
+    }
 }
 
 double ContactTerm::add_force_brute(const Model& model, const Eigen::VectorXd& q,
@@ -437,7 +476,7 @@ double ContactTerm::add_force_brute(const Model& model, const Eigen::VectorXd& q
   Eigen::VectorXd no_velocity;
   if (!damp) no_velocity = Eigen::VectorXd::Zero(q.size());
   const Eigen::VectorXd& vel = damp ? v : no_velocity;
-  const double two_r = 2 * model.params.radius;
+  const double two_r = 2 * model.params.material.radius;
   const int n = m_num_seg;
   double energy = 0;
   auto t = Clock::now();

@@ -97,7 +97,8 @@ class ContactTerm : public Term {
   static constexpr double DEFAULT_MARGIN_RADII = 0.5;
 
   /// Sizes the buffers for `model` (the BVH is built on the first evaluation). Throws
-  /// std::invalid_argument if model.params.contact_points exceeds MAX_CONTACT_POINTS.
+  /// std::invalid_argument if model.params.discretisation.contact_points exceeds
+  /// MAX_CONTACT_POINTS.
   explicit ContactTerm(const Model& model, ContactCulling culling = ContactCulling::BVH);
 
   std::string_view name() const override { return "contact"; }
@@ -117,12 +118,16 @@ class ContactTerm : public Term {
   /// for a negative or non-finite margin.
   void set_candidate_margin(double margin);
   /// Evaluations so far, and how many of them rebuilt the candidate list.
-  long long evaluations() const { return m_evaluations; }
+  long long evaluations() const override { return m_evaluations; }
   long long candidate_rebuilds() const { return m_rebuilds; }
   /// Counts of the last evaluation.
   const ContactStats& last_stats() const { return m_stats; }
   /// Stage timings of the last evaluation.
   const ContactTimings& last_timings() const { return m_timings; }
+
+  /// The counters and, for BVH culling, the segment pairs in contact of the last
+  /// evaluation (brute force leaves the pair list empty).
+  void record(StepData& data) const override;
 
   /// When on, each evaluation records its point pairs in contact (slow; for tests).
   void set_record_point_pairs(bool on) { m_record = on; }
@@ -134,6 +139,8 @@ class ContactTerm : public Term {
   struct PairForce {
     int j = 0;
     Vector12d force_i, force_j;
+    double min_d2 = 0;      // smallest squared distance of a point pair in contact (cm²)
+    Eigen::Vector3d delta;  // y_j − y_i at that point pair (cm)
   };
   // per-segment (row) outputs of the kernel stage
   struct RowStats {
@@ -154,6 +161,7 @@ class ContactTerm : public Term {
 
   ContactCulling m_culling;
   int m_num_seg = 0;
+  double m_radius = 0;
   int m_points = 0;
   bool m_has_velocity = false;
   bool m_record = false;

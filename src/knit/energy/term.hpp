@@ -4,6 +4,7 @@
 #include <string_view>
 
 #include "knit/model/model.hpp"
+#include "knit/model/step_data.hpp"
 
 namespace knit {
 
@@ -16,6 +17,13 @@ class Term {
   /// and returns its potential energy E (erg = g cm²/s²; 0 for pure damping).
   virtual double add_force(const Model& model, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
                            Eigen::VectorXd& force) = 0;
+  /// Writes what the term's last add_force found, beyond its energy and force, into the
+  /// step data (the contact term: the contact set and its counters). Called by the
+  /// simulator right after the evaluation at a recorded state.
+  virtual void record(StepData& data) const {}
+  /// Number of add_force calls so far (counted by the terms that are costly to evaluate;
+  /// -1 when not counted).
+  virtual long long evaluations() const { return -1; }
   /// Potential energy alone (erg).
   virtual double energy(const Model& model, const Eigen::VectorXd& q) {
     Eigen::VectorXd f = Eigen::VectorXd::Zero(q.size());

@@ -7,6 +7,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <stdexcept>
 
@@ -47,9 +48,14 @@ StateFile make_state_file(const Model& model, const State& state) {
   f.state = state;
   for (const YarnInfo& y : model.yarns) {
     f.yarn_cp_counts.push_back(y.num_cp());
-    f.yarn_radius.push_back(model.params.radius);
+    f.yarn_radius.push_back(model.params.material.radius);
   }
   if (model.has_stitches()) f.stitch = model.stitch;
+  if (model.knit) {
+    f.knit = model.knit;
+    f.rest_length = model.rest_length;
+    f.glues = model.glues;
+  }
   return f;
 }
 
@@ -85,7 +91,7 @@ void write_state_file(const std::string& path, const StateFile& f) {
   out.append(MAGIC, 8);
   put<uint32_t>(out, STATE_FILE_VERSION);
   put<uint32_t>(out, static_cast<uint32_t>(f.yarn_cp_counts.size()));
-  put<uint32_t>(out, f.stitch.empty() ? 0u : 1u);
+  put<uint32_t>(out, (f.stitch.empty() ? 0u : 1u) | (f.knit ? 2u : 0u));
   put<double>(out, f.state.time);
   for (size_t y = 0; y < f.yarn_cp_counts.size(); ++y) {
     put<uint32_t>(out, static_cast<uint32_t>(f.yarn_cp_counts[y]));
@@ -99,6 +105,31 @@ void write_state_file(const std::string& path, const StateFile& f) {
     for (const StitchCoord& s : f.stitch) {
       put<int32_t>(out, s.row);
       put<int32_t>(out, s.col);
+    }
+  }
+  if (f.knit) {
+    if (static_cast<int>(f.rest_length.size()) != f.num_seg())
+      throw std::invalid_argument(path + ": rest lengths do not match the segments");
+    const std::string info = nlohmann::json{
+        {"pattern", f.knit->pattern},
+        {"rows", f.knit->rows},
+        {"cols", f.knit->cols},
+        {"in_the_round", f.knit->in_the_round},
+        {"segments_per_stitch", f.knit->segments_per_stitch},
+        {"stitch_size_cm", f.knit->stitch_size_cm},
+        {"shrink",
+         f.knit->shrink}}.dump();
+    put<uint32_t>(out, static_cast<uint32_t>(info.size()));
+    out.append(info);
+    for (double l : f.rest_length) put<double>(out, l);
+    put<uint32_t>(out, static_cast<uint32_t>(f.glues.size()));
+    for (const Glue& g : f.glues) {
+      put<int32_t>(out, g.a.segment);
+      put<double>(out, g.a.t);
+      put<int32_t>(out, g.b.segment);
+      put<double>(out, g.b.t);
+      for (int c = 0; c < 3; ++c) put<double>(out, g.gap[c]);
+      put<double>(out, g.close_time);
     }
   }
   out.append(END_MAGIC, 4);
@@ -115,12 +146,12 @@ StateFile read_state_file(const std::string& path) {
   if (r.bytes(8, "magic") != std::string_view(MAGIC, 8))
     r.fail_at(0, "not a knitsim state file (bad magic)");
   const auto version = r.get<uint32_t>("version");
-  if (version != STATE_FILE_VERSION)
-    r.fail("unsupported state file version " + std::to_string(version) + " (this build reads " +
-           std::to_string(STATE_FILE_VERSION) + ")");
+  if (version < 1 || version > STATE_FILE_VERSION)
+    r.fail("unsupported state file version " + std::to_string(version) +
+           " (this build reads 1 to " + std::to_string(STATE_FILE_VERSION) + ")");
   const auto nyarn = r.get<uint32_t>("yarn count");
   const auto flags = r.get<uint32_t>("flags");
-  if (flags > 1) r.fail("unknown flags " + std::to_string(flags));
+  if (flags > (version >= 2 ? 3u : 1u)) r.fail("unknown flags " + std::to_string(flags));
   StateFile f;
   f.state.time = r.get<double>("time");
   if (nyarn == 0 || nyarn > r.remaining() / 12)
@@ -149,6 +180,51 @@ StateFile read_state_file(const std::string& path) {
     for (auto& s : f.stitch) {
       s.row = r.get<int32_t>("stitch row");
       s.col = r.get<int32_t>("stitch column");
+    }
+  }
+  if (flags & 2u) {
+    const auto n = r.get<uint32_t>("knit description size");
+    if (n > r.remaining()) r.fail("knit description size exceeds the file");
+    const std::string_view text = r.bytes(n, "knit description");
+    const nlohmann::json info = nlohmann::json::parse(text, nullptr, false);
+    KnitInfo k;
+    try {
+      if (!info.is_object()) throw std::invalid_argument("not a JSON object");
+      k.pattern = info.at("pattern").get<std::string>();
+      k.rows = info.at("rows").get<int>();
+      k.cols = info.at("cols").get<int>();
+      k.in_the_round = info.at("in_the_round").get<bool>();
+      k.segments_per_stitch = info.at("segments_per_stitch").get<int>();
+      k.stitch_size_cm = info.at("stitch_size_cm").get<double>();
+      k.shrink = info.at("shrink").get<double>();
+    } catch (const std::exception& e) {
+      r.fail(std::string("bad knit description: ") + e.what());
+    }
+    f.knit = k;
+    const int nseg = f.num_seg();
+    if (static_cast<long long>(nseg) * 8 > static_cast<long long>(r.remaining()))
+      r.fail("rest lengths exceed the file size");
+    f.rest_length.resize(nseg);
+    for (double& l : f.rest_length) {
+      l = r.get<double>("rest length");
+      if (!(l > 0) || !std::isfinite(l)) r.fail("a rest length is not a positive number");
+    }
+    const auto nglue = r.get<uint32_t>("glue count");
+    if (nglue > r.remaining() / 56) r.fail("implausible glue count " + std::to_string(nglue));
+    for (uint32_t g = 0; g < nglue; ++g) {
+      Glue glue;
+      glue.a.segment = r.get<int32_t>("glue segment");
+      glue.a.t = r.get<double>("glue parameter");
+      glue.b.segment = r.get<int32_t>("glue segment");
+      glue.b.t = r.get<double>("glue parameter");
+      for (int c = 0; c < 3; ++c) glue.gap[c] = r.get<double>("glue gap");
+      glue.close_time = r.get<double>("glue close time");
+      for (const YarnPoint& p : {glue.a, glue.b})
+        if (p.segment < 0 || p.segment >= nseg || !(p.t >= 0 && p.t <= 1))
+          r.fail("glue " + std::to_string(g) + " names a point off the yarn");
+      if (!glue.gap.allFinite() || !std::isfinite(glue.close_time) || glue.close_time < 0)
+        r.fail("glue " + std::to_string(g) + " has a bad gap or close time");
+      f.glues.push_back(glue);
     }
   }
   if (r.bytes(4, "end marker") != std::string_view(END_MAGIC, 4)) r.fail("bad end marker");

@@ -4,11 +4,19 @@
 // be rendered or exported without its scene. Versioned; written atomically.
 //
 // Layout (little-endian):
-//   "KNITSTAT" | u32 version (=1) | u32 num_yarns | u32 flags (bit 0: stitches) | f64 time
+//   "KNITSTAT" | u32 version (1 or 2) | u32 num_yarns | u32 flags | f64 time
+//     flags: bit 0 stitches, bit 1 knit (version 2 only)
 //   per yarn: u32 num_cp | f64 radius (cm)
 //   f64 q[3·num_cp] | f64 v[3·num_cp]
 //   if stitches: per segment i32 row, i32 col
+//   if knit: u32 n | n bytes of JSON (pattern, rows, cols, in_the_round,
+//            segments_per_stitch, stitch_size_cm, shrink)
+//            f64 rest_length[num_seg] (cm)
+//            u32 num_glues | per glue: i32 segment a, f64 t a, i32 segment b, f64 t b,
+//                                      f64 gap[3] (cm), f64 close_time (s)
 //   "KEND"
+// Version 1 files (no knit block) are still read.
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -22,13 +30,17 @@ struct StateFile {
   std::vector<int> yarn_cp_counts;  ///< control points per yarn
   std::vector<double> yarn_radius;  ///< cm
   std::vector<StitchCoord> stitch;  ///< per segment; empty when unknown
+  /// A generated knit's origin, rest lengths and glues (absent for other yarns).
+  std::optional<KnitInfo> knit;
+  std::vector<double> rest_length;  ///< per segment when `knit` is set (cm)
+  std::vector<Glue> glues;          ///< when `knit` is set
   int num_cp() const;
   int num_seg() const;
   /// Global index of the first control point of every yarn.
   std::vector<int> yarn_cp_begin() const;
 };
 
-inline constexpr unsigned STATE_FILE_VERSION = 1;
+inline constexpr unsigned STATE_FILE_VERSION = 2;
 
 /// Snapshot of a model's layout with the given state.
 StateFile make_state_file(const Model& model, const State& state);

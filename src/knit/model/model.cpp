@@ -1,5 +1,10 @@
 #include "knit/model/model.hpp"
 
+#include "knit/constraints/clamp.hpp"
+#include "knit/constraints/glue.hpp"
+#include "knit/constraints/inextensibility.hpp"
+#include "knit/constraints/pin.hpp"
+
 #include <algorithm>
 #include <stdexcept>
 #include <string>
@@ -70,8 +75,8 @@ Model ModelBuilder::build(const Params& params, double rest_scale) const {
   if (m_yarns.empty()) throw std::invalid_argument("a model needs at least one yarn");
   Model m;
   m.params = params;
-  m.quad = simpson_table(params.quadrature_points);
-  m.contact_quad = midpoint_table(params.contact_points);
+  m.quad = simpson_table(params.discretisation.quadrature_points);
+  m.contact_quad = midpoint_table(params.discretisation.contact_points);
   const Eigen::VectorXd q = positions();
   int cp = 0, seg = 0;
   for (int y = 0; y < num_yarns(); ++y) {
@@ -99,7 +104,7 @@ Model ModelBuilder::build(const Params& params, double rest_scale) const {
       throw std::invalid_argument("segment " + std::to_string(i) +
                                   " has zero length (its 4 control points coincide)");
     m.rest_length[i] = rest_scale * len;
-    for (int a = 0; a < 4; ++a) m.mass[m.seg_cp[i] + a] += params.density * len * int_b[a];
+    for (int a = 0; a < 4; ++a) m.mass[m.seg_cp[i] + a] += params.material.density * len * int_b[a];
   }
   m.inv_mass3.resize(3 * cp);
   for (int k = 0; k < cp; ++k) m.inv_mass3.segment<3>(3 * k).setConstant(1.0 / m.mass[k]);
@@ -123,6 +128,24 @@ Model ModelBuilder::build(const Params& params, double rest_scale) const {
   }
   m.pins = m_pins;
   m.glues = m_glues;
+  for (size_t k = 0; k < m_clamps.size(); ++k) {
+    Clamp c = m_clamps[k];
+    if (c.name.empty()) c.name = "clamp" + std::to_string(k);
+    if (c.points.empty()) throw std::invalid_argument("clamp " + c.name + ": it holds no points");
+    for (size_t p = 0; p < c.points.size(); ++p)
+      check_point(c.points[p], "clamp " + c.name + " point " + std::to_string(p));
+    c.rest.clear();
+    c.centre.setZero();
+    for (const YarnPoint& p : c.points) {
+      c.rest.push_back(point_position(m, q, p));
+      c.centre += c.rest.back();
+    }
+    c.centre /= static_cast<double>(c.points.size());
+    for (size_t f = 1; f < c.keyframes.size(); ++f)
+      if (!(c.keyframes[f].time > c.keyframes[f - 1].time))
+        throw std::invalid_argument("clamp " + c.name + ": keyframe times must increase");
+    m.clamps.push_back(std::move(c));
+  }
   for (const Glue& g : m_glues) {
     const int k = GLUE_CONTACT_EXCLUSION;
     for (int i = std::max(0, g.a.segment - k); i <= std::min(seg - 1, g.a.segment + k); ++i)
@@ -132,7 +155,36 @@ Model ModelBuilder::build(const Params& params, double rest_scale) const {
   std::sort(m.contact_exclusions.begin(), m.contact_exclusions.end());
   m.contact_exclusions.erase(std::unique(m.contact_exclusions.begin(), m.contact_exclusions.end()),
                              m.contact_exclusions.end());
+  build_constraint_groups(m);
   return m;
+}
+
+void build_constraint_groups(Model& m) {
+  m.constraint_groups.clear();
+  if (m.params.solver.length_constraints)
+    m.constraint_groups.push_back(std::make_shared<LengthGroup>(m));
+  for (size_t k = 0; k < m.pins.size(); ++k)
+    m.constraint_groups.push_back(std::make_shared<PinGroup>("pin" + std::to_string(k), m.pins[k]));
+  for (size_t k = 0; k < m.glues.size(); ++k)
+    m.constraint_groups.push_back(
+        std::make_shared<GlueGroup>("glue" + std::to_string(k), m.glues[k]));
+  for (const Clamp& c : m.clamps) m.constraint_groups.push_back(std::make_shared<ClampGroup>(c));
+}
+
+Keyframe Clamp::pose(double time) const {
+  if (keyframes.empty()) return {};
+  if (time <= keyframes.front().time) return keyframes.front();
+  if (time >= keyframes.back().time) return keyframes.back();
+  size_t f = 1;
+  while (keyframes[f].time < time) ++f;
+  const Keyframe& a = keyframes[f - 1];
+  const Keyframe& b = keyframes[f];
+  const double s = (time - a.time) / (b.time - a.time);
+  Keyframe k;
+  k.time = time;
+  k.translation = (1 - s) * a.translation + s * b.translation;
+  k.rotation = a.rotation.slerp(s, b.rotation);
+  return k;
 }
 
 Model scale_rest_lengths(const Model& model, double scale) {

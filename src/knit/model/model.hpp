@@ -2,9 +2,12 @@
 // The immutable Model: topology of the yarns, rest lengths, lumped masses, constraints
 // and quadrature tables. Everything that changes in time lives in State.
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -59,6 +62,46 @@ struct Glue {
   }
 };
 
+/// A rigid pose of a clamp's frame at a time: the held points x₀ (as at time 0) go to
+/// centre + translation + R (x₀ − centre), R = rotation.
+struct Keyframe {
+  double time = 0;                                        ///< s
+  Eigen::Vector3d translation = Eigen::Vector3d::Zero();  ///< cm
+  Eigen::Quaterniond rotation = Eigen::Quaterniond::Identity();
+};
+
+/// Clamp: a set of yarn points held rigidly to a frame that moves along keyframes
+/// (translation interpolated linearly, rotation by slerp, held before the first keyframe
+/// and after the last; no keyframes: held still).
+struct Clamp {
+  std::string name;
+  std::vector<YarnPoint> points;
+  std::vector<Eigen::Vector3d> rest;                 ///< each point's position at time 0 (cm)
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();  ///< centroid of `rest`: the pivot (cm)
+  std::vector<Keyframe> keyframes;                   ///< by increasing time
+  /// The frame's pose at `time` (translation and rotation, interpolated).
+  Keyframe pose(double time) const;
+  /// Where point k is held at `time` (cm).
+  Eigen::Vector3d target(int k, double time) const {
+    const Keyframe p = pose(time);
+    return centre + p.translation + p.rotation * (rest[k] - centre);
+  }
+};
+
+/// Where a model's yarn came from when it is a generated knit: enough to rebuild the same
+/// knit or to go on relaxing it (written into .kstate files with the rest lengths and
+/// glues).
+struct KnitInfo {
+  std::string pattern;  ///< built-in name or chart path, as given
+  int rows = 0, cols = 0;
+  bool in_the_round = false;
+  int segments_per_stitch = 8;
+  double stitch_size_cm = 0;  ///< 0 = the default for the yarn
+  double shrink = 1;          ///< rest-length factor c the model was built with
+};
+
+class ConstraintGroup;
+
 class Model {
  public:
   Params params;
@@ -71,6 +114,13 @@ class Model {
   Eigen::VectorXd inv_mass3;        ///< 1/m per coordinate (length 3·num_cp)
   std::vector<Pin> pins;
   std::vector<Glue> glues;
+  std::vector<Clamp> clamps;
+  /// Set when the yarn is a generated knit (see KnitInfo).
+  std::optional<KnitInfo> knit;
+  /// The rows the projection enforces: "length" (when solver.length_constraints), then
+  /// one group per pin ("pin0", …), per glue ("glue0", …) and per clamp (its name), in
+  /// that order. Shared, immutable.
+  std::vector<std::shared_ptr<const ConstraintGroup>> constraint_groups;
   QuadratureTable quad;          ///< energy quadrature (Simpson)
   QuadratureTable contact_quad;  ///< contact quadrature (midpoint)
 
@@ -108,6 +158,9 @@ class ModelBuilder {
   int add_yarn(const Eigen::Matrix3Xd& control_points);
   void add_pin(const Pin& pin) { m_pins.push_back(pin); }
   void add_glue(const Glue& glue) { m_glues.push_back(glue); }
+  /// Adds a clamp (its points' rest positions and centre are taken from the control
+  /// points when the model is built; a clamp without a name is called "clamp<k>").
+  void add_clamp(Clamp clamp) { m_clamps.push_back(std::move(clamp)); }
   /// Stitch coordinates for every segment of every yarn added so far.
   void set_stitches(std::vector<StitchCoord> stitches) { m_stitch = std::move(stitches); }
   int num_yarns() const { return static_cast<int>(m_yarns.size()); }
@@ -124,6 +177,7 @@ class ModelBuilder {
   std::vector<Eigen::Matrix3Xd> m_yarns;
   std::vector<Pin> m_pins;
   std::vector<Glue> m_glues;
+  std::vector<Clamp> m_clamps;
   std::vector<StitchCoord> m_stitch;
 };
 
@@ -132,6 +186,9 @@ double segment_arclength(const Vector12d& x, const QuadratureTable& quad);
 
 /// A copy of `model` with every rest length multiplied by `scale` (mass unchanged).
 Model scale_rest_lengths(const Model& model, double scale);
+
+/// Builds model.constraint_groups from its parameters, pins, glues and clamps.
+void build_constraint_groups(Model& model);
 
 /// Position y(s) of a yarn point.
 Eigen::Vector3d point_position(const Model& model, const Eigen::VectorXd& q, const YarnPoint& p);

@@ -1,10 +1,12 @@
 #include "knit/scene/scene.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include <filesystem>
 
 #include "knit/io/import.hpp"
+#include "knit/io/state_file.hpp"
 #include "knit/spline/fit.hpp"
 
 namespace knit {
@@ -147,13 +149,125 @@ YarnPoint parse_point(const JsonReader& r, const ModelBuilder& b, bool allow_at)
   return {nseg + seg, t};
 }
 
+// the rotation {"axis": [x,y,z], "degrees": a}
+Eigen::Quaterniond parse_rotation(const JsonReader& r) {
+  r.allow_keys({"axis", "degrees"});
+  const Eigen::Vector3d axis = r.at("axis").vec3();
+  if (!(axis.norm() > 0)) r.at("axis").fail("the rotation axis must not be zero");
+  const double degrees = r.at("degrees").number();
+  return Eigen::Quaterniond(Eigen::AngleAxisd(degrees * M_PI / 180, axis.normalized()));
+}
+
+// a relaxed knit from a .kstate, placed by "translate" and "rotate" (about the origin,
+// rotation first); it starts at rest
+struct PlacedKnit {
+  Eigen::Matrix3Xd points;
+  std::vector<StitchCoord> stitch;
+  std::vector<Glue> glues;  // local segment indices
+  bool in_the_round = false;
+  std::string source;
+};
+
+PlacedKnit parse_knit(const JsonReader& k, const std::string& scene_path) {
+  k.allow_keys({"state", "translate", "rotate"});
+  const std::string path = k.at("state").string();
+  const std::filesystem::path base = std::filesystem::path(scene_path).parent_path();
+  const std::filesystem::path full =
+      std::filesystem::path(path).is_absolute() ? std::filesystem::path(path) : base / path;
+  StateFile f;
+  try {
+    f = read_state_file(full.string());
+  } catch (const std::exception& e) {
+    k.at("state").fail(e.what());
+  }
+  if (f.yarn_cp_counts.size() != 1)
+    k.at("state").fail(full.string() + " holds " + std::to_string(f.yarn_cp_counts.size()) +
+                       " yarns; a knit is one yarn");
+  if (f.stitch.empty())
+    k.at("state").fail(full.string() +
+                       " has no stitch coordinates: write it with `knitsim relax PATTERN`");
+  const Eigen::Vector3d t = k.has("translate") ? k.at("translate").vec3() : Eigen::Vector3d::Zero();
+  const Eigen::Quaterniond rot =
+      k.has("rotate") ? parse_rotation(k.at("rotate")) : Eigen::Quaterniond::Identity();
+  PlacedKnit out;
+  out.source = full.string();
+  out.points =
+      (rot.toRotationMatrix() * Eigen::Map<const Eigen::Matrix3Xd>(f.state.q.data(), 3, f.num_cp()))
+          .colwise() +
+      t;
+  out.stitch = f.stitch;
+  out.in_the_round = f.knit && f.knit->in_the_round;
+  for (Glue g : f.glues) {
+    // a relaxed knit's glues have closed: they hold the ends where they are
+    g.gap.setZero();
+    g.close_time = 0;
+    out.glues.push_back(g);
+  }
+  return out;
+}
+
+// the yarn points a clamp holds: "rows" or "cols" [first, last] of a knit's stitches
+// (negative counts from the end: -1 is the last), one point at the start of each segment
+// in them; or "points", a list of yarn points
+std::vector<YarnPoint> parse_clamp_points(const JsonReader& c, const ModelBuilder& b,
+                                          const std::vector<StitchCoord>& stitch,
+                                          const std::vector<SceneKnit>& knits) {
+  const int kinds = c.has("rows") + c.has("cols") + c.has("points");
+  if (kinds != 1) c.fail("expected exactly one of \"rows\", \"cols\", \"points\"");
+  std::vector<YarnPoint> points;
+  if (c.has("points")) {
+    const JsonReader list = c.at("points");
+    list.require_array(1);
+    for (size_t k = 0; k < list.size(); ++k) {
+      const JsonReader p = list.at(k);
+      p.allow_keys({"yarn", "segment", "t", "at"});
+      points.push_back(parse_point(p, b, true));
+    }
+    return points;
+  }
+  const bool rows = c.has("rows");
+  const JsonReader range = c.at(rows ? "rows" : "cols");
+  if (knits.empty()) range.fail("the scene has no knit to clamp by stitch coordinates");
+  range.require_array(2);
+  if (range.size() != 2) range.fail("expected [first, last]");
+  int lo = range.at(0).integer(-1000000), hi = range.at(1).integer(-1000000);
+  int extent = 0;
+  for (const StitchCoord& s : stitch) extent = std::max(extent, (rows ? s.row : s.col) + 1);
+  if (lo < 0) lo += extent;
+  if (hi < 0) hi += extent;
+  if (lo < 0 || hi >= extent || lo > hi)
+    range.fail("expected " + std::string(rows ? "rows" : "columns") + " within [0, " +
+               std::to_string(extent - 1) + "] (negative counts from the end), first ≤ last");
+  for (int i = 0; i < static_cast<int>(stitch.size()); ++i) {
+    const int v = rows ? stitch[i].row : stitch[i].col;
+    if (v >= lo && v <= hi) points.push_back({i, 0.0});
+  }
+  return points;
+}
+
+std::vector<Keyframe> parse_keyframes(const JsonReader& r) {
+  r.require_array(1);
+  std::vector<Keyframe> frames;
+  for (size_t k = 0; k < r.size(); ++k) {
+    const JsonReader f = r.at(k);
+    f.allow_keys({"time", "translate", "rotate"});
+    Keyframe kf;
+    kf.time = f.at("time").positive(true);
+    if (k > 0 && !(kf.time > frames.back().time)) f.at("time").fail("keyframe times must increase");
+    if (f.has("translate")) kf.translation = f.at("translate").vec3();
+    if (f.has("rotate")) kf.rotation = parse_rotation(f.at("rotate"));
+    frames.push_back(kf);
+  }
+  return frames;
+}
+
 }  // namespace
 
 Params parse_params(const JsonReader& r, Params p) {
   r.allow_keys({"preset", "radius", "density", "k_len", "k_bend", "k_global", "k_contact", "k_dt",
                 "k_dn", "alpha_small", "alpha_large", "quadrature_points", "contact_points",
                 "length_constraints", "contact", "constraint_tolerance",
-                "max_projection_iterations"});
+                "max_projection_iterations", "time_step"});
   if (r.has("preset")) {
     const std::string preset = r.at("preset").string();
     if (preset == "simulation")
@@ -163,60 +277,92 @@ Params parse_params(const JsonReader& r, Params p) {
     else
       r.at("preset").fail("expected \"simulation\" or \"relaxation\", got \"" + preset + "\"");
   }
-  if (r.has("radius")) p.radius = r.at("radius").positive();
-  if (r.has("density")) p.density = r.at("density").positive();
-  if (r.has("k_len")) p.k_len = r.at("k_len").positive(true);
-  if (r.has("k_bend")) p.k_bend = r.at("k_bend").positive(true);
-  if (r.has("k_global")) p.k_global = r.at("k_global").positive(true);
-  if (r.has("k_contact")) p.k_contact = r.at("k_contact").positive(true);
-  if (r.has("k_dt")) p.k_dt = r.at("k_dt").positive(true);
-  if (r.has("k_dn")) p.k_dn = r.at("k_dn").positive(true);
-  for (auto [key, dst] :
-       {std::pair{"alpha_small", &p.alpha_small}, {"alpha_large", &p.alpha_large}}) {
+  if (r.has("radius")) p.material.radius = r.at("radius").positive();
+  if (r.has("density")) p.material.density = r.at("density").positive();
+  if (r.has("k_len")) p.material.k_len = r.at("k_len").positive(true);
+  if (r.has("k_bend")) p.material.k_bend = r.at("k_bend").positive(true);
+  if (r.has("k_global")) p.material.k_global = r.at("k_global").positive(true);
+  if (r.has("k_contact")) p.material.k_contact = r.at("k_contact").positive(true);
+  if (r.has("k_dt")) p.material.k_dt = r.at("k_dt").positive(true);
+  if (r.has("k_dn")) p.material.k_dn = r.at("k_dn").positive(true);
+  for (auto [key, dst] : {std::pair{"alpha_small", &p.material.alpha_small},
+                          {"alpha_large", &p.material.alpha_large}}) {
     if (!r.has(key)) continue;
     *dst = r.at(key).positive(true);
     if (*dst > 1) r.at(key).fail("expected a value in [0, 1]");
   }
   if (r.has("quadrature_points")) {
-    p.quadrature_points = r.at("quadrature_points").integer(3);
-    if (p.quadrature_points % 2 == 0)
+    p.discretisation.quadrature_points = r.at("quadrature_points").integer(3);
+    if (p.discretisation.quadrature_points % 2 == 0)
       r.at("quadrature_points").fail("Simpson's rule needs an odd number of points");
   }
-  if (r.has("contact_points")) p.contact_points = r.at("contact_points").integer(1);
-  if (r.has("length_constraints")) p.length_constraints = r.at("length_constraints").boolean();
-  if (r.has("contact")) p.contact = r.at("contact").boolean();
+  if (r.has("contact_points")) p.discretisation.contact_points = r.at("contact_points").integer(1);
+  if (r.has("length_constraints"))
+    p.solver.length_constraints = r.at("length_constraints").boolean();
+  if (r.has("contact")) p.material.contact = r.at("contact").boolean();
   if (r.has("constraint_tolerance"))
-    p.constraint_tolerance = r.at("constraint_tolerance").positive();
+    p.solver.constraint_tolerance = r.at("constraint_tolerance").positive();
   if (r.has("max_projection_iterations"))
-    p.max_projection_iterations = r.at("max_projection_iterations").integer(1);
+    p.solver.max_projection_iterations = r.at("max_projection_iterations").integer(1);
+  if (r.has("time_step")) p.solver.time_step = r.at("time_step").positive();
   return p;
 }
 
-Scene parse_scene(const nlohmann::json& doc, const std::string& source) {
+Scene parse_scene(const nlohmann::json& doc, const std::string& source, const Params& base) {
   const JsonReader root(doc, source);
-  root.allow_keys({"params", "gravity", "time_step", "duration", "output_every", "yarns", "pins",
-                   "glue", "description"});
-  Params params = root.has("params") ? parse_params(root.at("params"), Params::simulation())
-                                     : Params::simulation();
+  root.allow_keys({"params", "gravity", "time_step", "duration", "output_every", "yarns", "knits",
+                   "pins", "glue", "clamps", "description"});
+  Params params = root.has("params") ? parse_params(root.at("params"), base) : base;
   if (root.has("gravity")) params.gravity = root.at("gravity").vec3();
   Scene scene;
-  if (root.has("time_step")) scene.time_step = root.at("time_step").positive();
+  if (root.has("time_step")) {
+    if (root.has("params") && root.at("params").has("time_step"))
+      root.at("time_step").fail("the time step is given twice (also in \"params\")");
+    params.solver.time_step = root.at("time_step").positive();
+  }
   if (root.has("duration")) scene.duration = root.at("duration").positive(true);
   if (root.has("output_every")) scene.output_every = root.at("output_every").integer(1);
   if (root.has("description")) root.at("description").string();
+  if (!root.has("knits")) root.at("yarns");  // a scene without knits needs yarns
 
   ModelBuilder builder;
-  const JsonReader yarns = root.at("yarns");
-  yarns.require_array(1);
-  for (size_t k = 0; k < yarns.size(); ++k) {
-    const JsonReader y = yarns.at(k);
-    if (y.has("import")) {
-      y.allow_keys({"import"});
-      for (const Eigen::Matrix3Xd& cp : parse_import(y, source)) builder.add_yarn(cp);
-    } else {
-      builder.add_yarn(parse_yarn(y));
+  std::vector<StitchCoord> stitch;
+  std::vector<Glue> knit_glues;
+  if (root.has("yarns")) {
+    const JsonReader yarns = root.at("yarns");
+    yarns.require_array(root.has("knits") ? 0 : 1);
+    for (size_t k = 0; k < yarns.size(); ++k) {
+      const JsonReader y = yarns.at(k);
+      if (y.has("import")) {
+        y.allow_keys({"import"});
+        for (const Eigen::Matrix3Xd& cp : parse_import(y, source)) builder.add_yarn(cp);
+      } else {
+        builder.add_yarn(parse_yarn(y));
+      }
     }
   }
+  stitch.assign(builder.num_segments(), StitchCoord{});
+  if (root.has("knits")) {
+    const JsonReader knits = root.at("knits");
+    knits.require_array(1);
+    // the non-rigid damping regions are built from stitch coordinates, which two knits
+    // would share
+    if (knits.size() > 1) knits.fail("a scene holds at most one knit for now");
+    for (size_t k = 0; k < knits.size(); ++k) {
+      const PlacedKnit knit = parse_knit(knits.at(k), source);
+      const int seg0 = builder.num_segments();
+      const int yarn = builder.add_yarn(knit.points);
+      stitch.insert(stitch.end(), knit.stitch.begin(), knit.stitch.end());
+      for (Glue g : knit.glues) {
+        g.a.segment += seg0;
+        g.b.segment += seg0;
+        knit_glues.push_back(g);
+      }
+      scene.knits.push_back({knit.source, yarn, knit.in_the_round});
+    }
+  }
+  builder.set_stitches(stitch);
+  for (const Glue& g : knit_glues) builder.add_glue(g);
 
   const Eigen::VectorXd q0 = builder.positions();
   // pins start where their yarn point is; build a throwaway model for positions
@@ -251,10 +397,36 @@ Scene parse_scene(const nlohmann::json& doc, const std::string& source) {
       builder.add_glue({parse_point(a, builder, false), parse_point(b, builder, false)});
     }
   }
+  if (root.has("clamps")) {
+    const JsonReader clamps = root.at("clamps");
+    clamps.require_array();
+    std::vector<std::string> names;
+    for (size_t k = 0; k < clamps.size(); ++k) {
+      const JsonReader cr = clamps.at(k);
+      cr.allow_keys({"name", "rows", "cols", "points", "keyframes"});
+      Clamp clamp;
+      clamp.name = cr.has("name") ? cr.at("name").string() : "clamp" + std::to_string(k);
+      if (clamp.name.empty() || clamp.name.find_first_of(",\"\n") != std::string::npos)
+        cr.at("name").fail("a clamp's name must be non-empty, without commas or quotes");
+      if (std::find(names.begin(), names.end(), clamp.name) != names.end())
+        cr.at("name").fail("two clamps are called \"" + clamp.name + "\"");
+      names.push_back(clamp.name);
+      clamp.points = parse_clamp_points(cr, builder, stitch, scene.knits);
+      if (cr.has("keyframes")) clamp.keyframes = parse_keyframes(cr.at("keyframes"));
+      builder.add_clamp(clamp);
+    }
+  }
   scene.model = builder.build(params);
   scene.state.q = q0;
   scene.state.v = Eigen::VectorXd::Zero(q0.size());
   scene.state.time = 0;
+  return scene;
+}
+
+Scene scene_from_knit_state(const std::string& kstate_path, const Params& params) {
+  const std::string full = std::filesystem::absolute(kstate_path).string();
+  nlohmann::json doc = {{"knits", nlohmann::json::array({{{"state", full}}})}};
+  Scene scene = parse_scene(doc, full, params);
   return scene;
 }
 

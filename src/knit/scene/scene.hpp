@@ -1,5 +1,6 @@
 #pragma once
-// Scene files (JSON): yarns, parameters, pins and glue, time stepping. See
+// Scene files (JSON): yarns, relaxed knits, parameters, pins, glue and clamps, time
+// stepping. See
 // docs/scene-format.md for the schema. Parsing is strict: unknown keys, missing fields,
 // negative or non-finite parameters and references to yarns or segments that do not exist
 // are InputErrors naming the file and the field.
@@ -12,18 +13,31 @@
 
 namespace knit {
 
+/// A relaxed knit placed in a scene: its yarn and how its stitches wrap.
+struct SceneKnit {
+  std::string source;  ///< the .kstate it was read from
+  int yarn = 0;        ///< its yarn in the model
+  bool in_the_round = false;
+};
+
 struct Scene {
-  Model model;
+  Model model;  ///< its params.solver.time_step is the scene's time step
   State state;
-  double time_step = 1.0 / 11800;  ///< s
-  double duration = 1.0;           ///< s of simulated time
-  int output_every = 100;          ///< steps between written states
+  double duration = 1.0;   ///< s of simulated time
+  int output_every = 100;  ///< steps between written states
+  std::vector<SceneKnit> knits;
 };
 
 /// Reads `params` (every key optional) over `base`.
 Params parse_params(const JsonReader& reader, Params base);
-/// Parses a scene document; `source` names it in error messages.
-Scene parse_scene(const nlohmann::json& doc, const std::string& source);
+/// Parses a scene document; `source` names it in error messages (and relative paths in it
+/// are taken from its folder). `base` is what "params" is read over.
+Scene parse_scene(const nlohmann::json& doc, const std::string& source,
+                  const Params& base = Params::simulation());
+/// The scene {"knits": [{"state": kstate_path}]} with `params`: a relaxed knit (written by
+/// `knitsim relax`) at rest where it was relaxed, its rest lengths those of the relaxed
+/// yarn, its glues holding.
+Scene scene_from_knit_state(const std::string& kstate_path, const Params& params);
 /// Reads and parses a scene file.
 Scene load_scene(const std::string& path);
 

@@ -10,11 +10,11 @@
 namespace knit {
 
 struct RelaxOptions {
-  double time_step = 1.0 / 11800;  ///< s
-  double max_time = 2.0;           ///< s of simulated time at most
-  double ke_per_length = 1e-5;     ///< erg/cm: rest when ½ vᵀMv / L falls below
-  int check_every = 200;           ///< steps between rest checks (and written states)
-  std::string out_dir;
+  double max_time = 2.0;        ///< s of simulated time at most
+  double ke_per_length = 1e-5;  ///< erg/cm: rest when ½ vᵀMv / L falls below
+  int check_every = 200;        ///< steps between rest checks (and written states)
+  std::string out_dir;          ///< empty: write nothing
+  bool overwrite = false;       ///< empty a directory that holds another run's files first
   bool progress = true;
   bool write_frames = true;
 };
@@ -35,10 +35,10 @@ inline constexpr double RELAX_SHRINK = 0.935;
 /// coordinates, hence no filters, and keep 1.5.
 inline constexpr double RELAX_K_GLOBAL = 0.15;
 
-/// Relaxes `state` in place with `sim` (whose model carries the relaxation parameters and
-/// shrunk rest lengths). The summary gains `relaxed` (bool: the threshold was reached),
-/// `ke_per_length_threshold` and `ke_per_length` (erg/cm).
-/// `on_finish` (optional) adds further fields to the summary.
+/// Relaxes `state` in place with `sim` (whose model carries the relaxation parameters,
+/// the time step and shrunk rest lengths). The summary gains `relaxed` (bool: the threshold was
+/// reached), `ke_per_length_threshold` and `ke_per_length` (erg/cm). `on_finish` (optional) adds
+/// further fields to the summary.
 RunReport relax(Simulator& sim, State& state, const RelaxOptions& options,
                 nlohmann::json extra = nlohmann::json::object(),
                 std::function<void(Simulator&, const State&, nlohmann::json&)> on_finish = {});

@@ -1,13 +1,16 @@
 #pragma once
 // Runs a simulation for a duration, writing states, a CSV log and a JSON summary into an
-// output directory:
+// output directory (or nothing at all when no directory is given):
 //   DIR/frames/state_NNNNNN.kstate   every `output_every` steps (and the initial state)
 //   DIR/final.kstate                 the last state (the last good one if the run failed)
 //   DIR/log.csv                      time_s, kinetic_energy, potential_energy,
 //                                    max_violation, contact_pairs, min_contact_distance,
-//                                    wall_s_per_step — one row per written state,
-//                                    appended as the run goes
-//   DIR/summary.json                 status, counts, energies, timings (see docs/)
+//                                    wall_s_per_step, energy_<term>…, <group>_fx/fy/fz…
+//                                    — one row per written state, appended as the run goes
+//   DIR/summary.json                 status, counts, energies, constraint forces, timings
+// Everything the log, summary and progress line say is read from the simulator's
+// StepData; the runner evaluates nothing itself. The time step is the model's
+// (params.solver.time_step).
 #include <functional>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -17,14 +20,13 @@
 namespace knit {
 
 struct RunOptions {
-  double time_step = 1.0 / 11800;  ///< s
-  double duration = 1.0;           ///< s of simulated time to add
-  int output_every = 100;          ///< steps between written states
-  std::string out_dir;             ///< created if missing
-  bool progress = true;            ///< progress line on stderr for runs over ~2 s
+  double duration = 1.0;   ///< s of simulated time to add
+  int output_every = 100;  ///< steps between written states (and log rows)
+  std::string out_dir;     ///< created if missing; empty: write nothing
+  bool progress = true;    ///< progress line on stderr for runs over ~2 s
   bool write_frames = true;
   /// Optional early stop, checked at every output step: return true to end the run (ok).
-  std::function<bool(Simulator&, const State&)> stop_when;
+  std::function<bool(const StepData&, const State&)> stop_when;
   nlohmann::json extra = nlohmann::json::object();  ///< merged into summary.json
   /// Optional: called with the final state and the summary before it is written, to add
   /// fields (shape measures, …).
@@ -42,12 +44,10 @@ struct RunReport {
 /// also written to DIR/final.kstate and DIR/last_good.kstate.
 RunReport run_simulation(Simulator& sim, State& state, const RunOptions& options);
 
-/// Contact counters of a simulator's contact term, if it has one.
-struct ContactReport {
-  bool present = false;
-  long long pairs_in_contact = 0;
-  double min_distance_ratio = 0;
-};
-ContactReport contact_report(const Simulator& sim);
+/// The log.csv header for a simulator's terms and constraint groups.
+std::string log_header(const Simulator& sim);
+/// The summary's `constraint_forces`: per group (length excluded) its kind, force,
+/// torque, torque point and max |C| in the last step.
+nlohmann::json constraint_forces_json(const StepData& data);
 
 }  // namespace knit

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstring>
+#include <limits>
 #include <sstream>
 
 #include "knit/contact/contact_term.hpp"
@@ -60,8 +62,8 @@ std::vector<std::unique_ptr<Term>> default_terms(const Model& model) {
   terms.push_back(std::make_unique<Gravity>());
   terms.push_back(std::make_unique<BendingEnergy>());
   terms.push_back(std::make_unique<LengthEnergy>());
-  if (model.params.k_global > 0) terms.push_back(std::make_unique<GlobalDamping>());
-  if (model.params.contact) terms.push_back(std::make_unique<ContactTerm>(model));
+  if (model.params.material.k_global > 0) terms.push_back(std::make_unique<GlobalDamping>());
+  if (model.params.material.contact) terms.push_back(std::make_unique<ContactTerm>(model));
   return terms;
 }
 
@@ -70,10 +72,13 @@ Simulator::Simulator(Model model) : Simulator(model, default_terms(model)) {}
 Simulator::Simulator(Model model, std::vector<std::unique_ptr<Term>> terms)
     : m_model(std::move(model)), m_terms(std::move(terms)), m_projection(m_model) {}
 
-Term* Simulator::find_term(std::string_view name) const {
-  for (const auto& t : m_terms)
-    if (t->name() == name) return t.get();
-  return nullptr;
+void Simulator::add_term(std::unique_ptr<Term> term) {
+  m_terms.push_back(std::move(term));
+  m_cached = false;
+}
+
+void Simulator::add_filter(std::unique_ptr<VelocityFilter> filter) {
+  m_filters.push_back(std::move(filter));
 }
 
 double Simulator::compute_forces(const Eigen::VectorXd& q, const Eigen::VectorXd& v,
@@ -81,25 +86,81 @@ double Simulator::compute_forces(const Eigen::VectorXd& q, const Eigen::VectorXd
   force.setZero(q.size());
   double e = 0;
   for (auto& term : m_terms) {
-    ScopedTimer timer(m_seconds[std::string(term->name())]);
+    ScopedTimer timer(m_data.stage_seconds[std::string(term->name())]);
     e += term->add_force(m_model, q, v, force);
   }
   return e;
 }
 
+namespace {
+
+// Σ_k f_k over the control points of a stacked force vector
+Eigen::Vector3d net_force(const Eigen::VectorXd& f) {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (Eigen::Index k = 0; k + 2 < f.size(); k += 3) sum += f.segment<3>(k);
+  return sum;
+}
+
+bool same_bits(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+  return a.size() == b.size() &&
+         std::memcmp(a.data(), b.data(), sizeof(double) * static_cast<size_t>(a.size())) == 0;
+}
+
+}  // namespace
+
+void Simulator::forward(const State& state) {
+  forward(state, std::numeric_limits<double>::quiet_NaN());
+}
+
+void Simulator::forward(const State& state, double known_violation) {
+  if (m_cached && state.time == m_cache_time && same_bits(state.q, m_cache_q) &&
+      same_bits(state.v, m_cache_v))
+    return;
+  // the same evaluation as compute_forces, term by term into one vector (so the force is
+  // bitwise the one a step's first evaluation gives), recording each term's share
+  m_force0.setZero(state.q.size());
+  m_data.terms.resize(m_terms.size());
+  m_data.contact = ContactRecord{};
+  double e = 0;
+  Eigen::Vector3d before = Eigen::Vector3d::Zero();
+  for (size_t t = 0; t < m_terms.size(); ++t) {
+    Term& term = *m_terms[t];
+    TermRecord& rec = m_data.terms[t];
+    {
+      ScopedTimer timer(m_data.stage_seconds[std::string(term.name())]);
+      rec.energy = term.add_force(m_model, state.q, state.v, m_force0);
+    }
+    ScopedTimer timer(m_data.stage_seconds["record"]);
+    e += rec.energy;
+    rec.name = std::string(term.name());
+    const Eigen::Vector3d after = net_force(m_force0);
+    rec.net_force = after - before;
+    before = after;
+    term.record(m_data);
+  }
+  m_data.time = state.time;
+  m_data.potential_energy = e;
+  m_data.kinetic_energy = kinetic_energy(state);
+  m_data.max_violation = std::isnan(known_violation) ? max_violation(state) : known_violation;
+  m_cache_q = state.q;
+  m_cache_v = state.v;
+  m_cache_time = state.time;
+  m_cached = true;
+}
+
 void Simulator::unconstrained_step(const State& s, double h, Eigen::VectorXd& q_out,
                                    Eigen::VectorXd& v_out) {
   const Eigen::VectorXd& inv_m = m_model.inv_mass3;
-  compute_forces(s.q, s.v, m_force);
+  forward(s);
   m_qmid = s.q + 0.5 * h * s.v;
-  m_vmid = s.v + 0.5 * h * inv_m.cwiseProduct(m_force);
+  m_vmid = s.v + 0.5 * h * inv_m.cwiseProduct(m_force0);
   compute_forces(m_qmid, m_vmid, m_force);
   q_out = s.q + h * m_vmid;
   v_out = s.v + h * inv_m.cwiseProduct(m_force);
 }
 
 ProjectionResult Simulator::project(Eigen::VectorXd& q, Eigen::VectorXd& v, double time, double h) {
-  ScopedTimer timer(m_seconds["projection"]);
+  ScopedTimer timer(m_data.stage_seconds["projection"]);
   m_qpre = q;
   ProjectionResult res = m_projection.project(m_model, q, time);
   v += (q - m_qpre) / h;
@@ -112,7 +173,7 @@ ProjectionResult Simulator::satisfy_constraints(State& state) {
 
 void Simulator::apply_filters(const Eigen::VectorXd& q, Eigen::VectorXd& v, double time) {
   for (auto& f : m_filters) {
-    ScopedTimer timer(m_seconds[std::string(f->name())]);
+    ScopedTimer timer(m_data.stage_seconds[std::string(f->name())]);
     f->apply(m_model, q, v, time);
   }
 }
@@ -147,13 +208,13 @@ StepResult Simulator::step(State& state, double h) {
   // a control point that moves more than a yarn radius in one step can carry its yarn
   // through another one between two contact evaluations: the run is no longer trustworthy
   const auto [travel, cp] = max_travel(state.q, m_qnew);
-  if (travel > m_model.params.radius) {
+  if (travel > m_model.params.material.radius) {
     int yarn = 0;
     while (cp >= m_model.yarns[yarn].cp_end) ++yarn;
     std::ostringstream msg;
     msg << "control point " << cp - m_model.yarns[yarn].cp_begin << " of yarn " << yarn << " moved "
         << travel << " cm in one step at t = " << t_new << " s, more than the yarn radius ("
-        << m_model.params.radius << " cm): the run is unstable; try a smaller time step";
+        << m_model.params.material.radius << " cm): the run is unstable; try a smaller time step";
     res.status = StepStatus::NON_FINITE;
     res.message = msg.str();
     return res;
@@ -161,6 +222,29 @@ StepResult Simulator::step(State& state, double h) {
   state.q.swap(m_qnew);
   state.v.swap(m_vnew);
   state.time = t_new;
+
+  // step records: the projection and what each constraint group exerted
+  ++m_data.steps;
+  m_data.projection = {res.projection.converged, res.projection.iterations,
+                       res.projection.max_violation};
+  {
+    ScopedTimer timer(m_data.stage_seconds["record"]);
+    m_projection.record_groups(m_model, state.q, t_new, h, m_data.constraints);
+  }
+  m_data.warnings.clear();
+  const int max_it = m_model.params.solver.max_projection_iterations;
+  if (res.projection.iterations > max_it / 2)
+    m_data.warnings.push_back("the projection needed " + std::to_string(res.projection.iterations) +
+                              " of " + std::to_string(max_it) + " iterations");
+  // the force records at the result (the next step's first evaluation); the projection
+  // ended by evaluating C at exactly these positions and time, so max |C| is known
+  forward(state, res.projection.max_violation);
+  if (m_data.contact.present && m_data.contact.min_distance_ratio < 0.5) {
+    std::ostringstream msg;
+    msg << "yarns came within half the contact distance (d = " << m_data.contact.min_distance_ratio
+        << ")";
+    m_data.warnings.push_back(msg.str());
+  }
   return res;
 }
 

@@ -1,9 +1,11 @@
 #pragma once
 // The time step of MODEL.md §5.2 as a sequence of named stages over an immutable Model
-// and a mutable State:
-//   1. unconstrained explicit-midpoint step of (q, v)       — two force evaluations
-//   2. fast projection onto the constraints, v += Δq / h
+// and a mutable State, each writing what it found into StepData:
+//   0. forward: the forces at (q, v), recorded (energies, per-term forces, contact set)
+//   1. unconstrained explicit-midpoint step of (q, v)       — one more force evaluation
+//   2. fast projection onto the constraint groups, v += Δq / h (multipliers, forces)
 //   3. velocity filters (non-rigid damping, object collisions)
+//   4. forward at the result, which the next step reuses as its stage 0
 // A step that fails leaves the State untouched and reports why: non-finite values, a
 // control point moving more than a yarn radius in one step (contact could then let yarns
 // pass through each other), or a projection that does not converge.
@@ -17,6 +19,7 @@
 #include "knit/filters/velocity_filter.hpp"
 #include "knit/model/model.hpp"
 #include "knit/model/state.hpp"
+#include "knit/model/step_data.hpp"
 
 namespace knit {
 
@@ -35,25 +38,33 @@ const char* status_word(StepStatus status);
 class Simulator {
  public:
   /// Builds the default terms for the model's parameters: gravity, bending, length,
-  /// global damping (when k_global > 0) and yarn–yarn contact (when params.contact).
+  /// global damping (when k_global > 0) and yarn–yarn contact (when material.contact).
   explicit Simulator(Model model);
   /// A simulator with exactly the given terms (for tests and special set-ups).
   Simulator(Model model, std::vector<std::unique_ptr<Term>> terms);
 
   const Model& model() const { return m_model; }
-  void add_term(std::unique_ptr<Term> term) { m_terms.push_back(std::move(term)); }
-  void add_filter(std::unique_ptr<VelocityFilter> filter) {
-    m_filters.push_back(std::move(filter));
-  }
-  /// The term with this name, or nullptr.
-  Term* find_term(std::string_view name) const;
+  void add_term(std::unique_ptr<Term> term);
+  void add_filter(std::unique_ptr<VelocityFilter> filter);
   const std::vector<std::unique_ptr<Term>>& terms() const { return m_terms; }
 
-  /// Advances `state` by h seconds. On failure `state` is unchanged.
+  /// Advances `state` by the model's time step (params.solver.time_step).
+  StepResult step(State& state) { return step(state, m_model.params.solver.time_step); }
+  /// Advances `state` by h seconds: forward (reused when the state is the one the last
+  /// step produced) → explicit midpoint → projection → filters → forward at the result.
+  /// On failure `state` is unchanged.
   StepResult step(State& state, double h);
+  /// Evaluates the forces at `state` and records them in data() (energies, per-term net
+  /// forces, contact set, kinetic energy, max |C|). Does nothing when data() already
+  /// describes exactly this state (same q, v and time, bitwise).
+  void forward(const State& state);
+  /// What the last forward and step recorded (see step_data.hpp).
+  const StepData& data() const { return m_data; }
+  /// Clears the stage timings in data().
+  void reset_timings() { m_data.stage_seconds.clear(); }
 
   /// Stage 1: the generalised force on the control points (dyn) at (q, v); returns the
-  /// total potential energy (erg).
+  /// total potential energy (erg). Records nothing.
   double compute_forces(const Eigen::VectorXd& q, const Eigen::VectorXd& v, Eigen::VectorXd& force);
   /// Stage 1: the unconstrained explicit-midpoint step from (q, v) into (q_out, v_out).
   void unconstrained_step(const State& state, double h, Eigen::VectorXd& q_out,
@@ -69,27 +80,29 @@ class Simulator {
 
   /// ½ vᵀ M v (erg) with the lumped mass.
   double kinetic_energy(const State& state) const;
-  /// Σ of the terms' potential energies (erg).
+  /// Σ of the terms' potential energies (erg), evaluated afresh (for tests and tools;
+  /// runs read data().potential_energy).
   double potential_energy(const State& state);
   /// Linear momentum Σ m_k v_k (g cm/s).
   Eigen::Vector3d linear_momentum(const State& state) const;
   /// Angular momentum about the origin Σ m_k q_k × v_k (g cm²/s).
   Eigen::Vector3d angular_momentum(const State& state) const;
-  /// max |C| over all constraints at the state's time.
+  /// max |C| over all constraint groups at the state's time, evaluated afresh.
   double max_violation(const State& state) {
     return m_projection.max_violation(m_model, state.q, state.time);
   }
 
-  /// Wall-clock seconds spent in each stage so far (term names, "projection", filter names).
-  const std::map<std::string, double>& stage_seconds() const { return m_seconds; }
-  void reset_timings() { m_seconds.clear(); }
-
  private:
+  void forward(const State& state, double known_violation);
   Model m_model;
   std::vector<std::unique_ptr<Term>> m_terms;
   std::vector<std::unique_ptr<VelocityFilter>> m_filters;
   FastProjection m_projection;
-  std::map<std::string, double> m_seconds;
+  StepData m_data;
+  // the state data() describes, and the force there (reused as a step's first evaluation)
+  bool m_cached = false;
+  Eigen::VectorXd m_cache_q, m_cache_v, m_force0;
+  double m_cache_time = 0;
   Eigen::VectorXd m_force, m_qmid, m_vmid, m_qnew, m_vnew, m_qpre;
 };
 

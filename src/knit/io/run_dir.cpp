@@ -1,0 +1,49 @@
+#include "knit/io/run_dir.hpp"
+
+#include <cstdlib>
+#include <filesystem>
+#include <stdexcept>
+#include <vector>
+
+namespace knit {
+
+void prepare_run_directory(const std::string& dir, bool overwrite) {
+  namespace fs = std::filesystem;
+  if (dir.empty()) throw std::invalid_argument("--out: no output directory given");
+  const fs::path p(dir);
+  std::error_code ec;
+  const fs::path canon = fs::weakly_canonical(p, ec);
+  const fs::path real = ec ? p : canon;
+  if (real == real.root_path())
+    throw std::invalid_argument("--out " + dir +
+                                ": refusing to write a run into the root directory");
+  if (const char* home = std::getenv("HOME"); home && *home) {
+    const fs::path h = fs::weakly_canonical(fs::path(home), ec);
+    if (!ec && real == h)
+      throw std::invalid_argument("--out " + dir +
+                                  ": refusing to write a run into the home directory");
+  }
+  if (fs::exists(p / ".git"))
+    throw std::invalid_argument("--out " + dir +
+                                ": refusing to write a run into a repository's root");
+  if (!fs::exists(p)) {
+    fs::create_directories(p);
+    return;
+  }
+  if (!fs::is_directory(p))
+    throw std::invalid_argument("--out " + dir + ": exists and is not a directory");
+  std::vector<fs::path> entries;
+  for (const auto& e : fs::directory_iterator(p)) entries.push_back(e.path());
+  if (entries.empty()) return;
+  if (!overwrite) {
+    std::string names;
+    for (size_t k = 0; k < entries.size() && k < 3; ++k)
+      names += (k ? ", " : "") + entries[k].filename().string();
+    if (entries.size() > 3) names += ", …";
+    throw std::invalid_argument("--out " + dir + ": the directory already holds files (" + names +
+                                "); give --overwrite to replace them, or choose another directory");
+  }
+  for (const fs::path& e : entries) fs::remove_all(e);
+}
+
+}  // namespace knit

@@ -1,0 +1,14 @@
+#pragma once
+// Run directories are never mixed: a run writes into an empty (or new) directory, or,
+// when told to overwrite, into one it has emptied first.
+#include <string>
+
+namespace knit {
+
+/// Makes `dir` ready for a run's outputs: creates it when missing; when it already holds
+/// files, throws std::invalid_argument naming a few of them unless `overwrite`, which
+/// removes them first. Always refuses "/", the home directory and a repository's root
+/// (a directory holding .git), and a path that is not a directory.
+void prepare_run_directory(const std::string& dir, bool overwrite);
+
+}  // namespace knit

@@ -1,0 +1,108 @@
+#pragma once
+// StepData: what the stages of a step computed, for everything that reads results — the
+// log, the summary, the progress line, the benchmarks, the stretch curves, Python. Readers
+// never reach into a term or the projection and never evaluate anything themselves.
+//
+// Convention (as MuJoCo's mjData after mj_step): the force records (energies, per-term
+// forces, the contact set, kinetic energy, max |C|) describe the state the simulator's
+// last `forward` saw — after a step, the state that step produced (each step ends by
+// evaluating the forces at its result, which the next step reuses as its first
+// evaluation, so no evaluation is added). The step records (projection statistics,
+// constraint multipliers and forces, timings, warnings) describe the step that produced
+// that state.
+#include <Eigen/Core>
+#include <limits>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace knit {
+
+/// One term's share of the forces at the recorded state.
+struct TermRecord {
+  std::string name;                                     ///< "gravity", "bending", "contact", …
+  double energy = 0;                                    ///< potential energy (erg; 0 for damping)
+  Eigen::Vector3d net_force = Eigen::Vector3d::Zero();  ///< Σ over control points (dyn)
+};
+
+/// A pair of segments in contact: the closest of their contact point pairs in contact.
+struct ContactPairRecord {
+  int seg_i = 0, seg_j = 0;  ///< global segment indices, seg_i < seg_j
+  double d = 0;              ///< smallest |Δy| / 2r over the pair's point pairs (< 1)
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();  ///< unit, from y_i to y_j at that pair
+  /// normal component of the contact force (elastic + damping, dyn) that segment i exerts
+  /// on segment j, normal · Σ F_j; positive when it pushes the yarns apart
+  double normal_force = 0;
+};
+
+/// Yarn–yarn contact at the recorded state (absent when contact is off).
+struct ContactRecord {
+  bool present = false;
+  long long candidate_segment_pairs = 0;
+  long long point_pairs_tested = 0;
+  long long point_pairs_in_contact = 0;
+  /// smallest d over non-neighbouring point pairs within the contact distance; +inf if none
+  double min_distance_ratio = std::numeric_limits<double>::infinity();
+  bool candidates_rebuilt = false;
+  std::vector<ContactPairRecord> pairs;  ///< segment pairs in contact, by (seg_i, seg_j)
+};
+
+/// What one constraint group did in the last step (MODEL.md §5.2). With Λ the group's
+/// multipliers summed over the projection's iterations (q ← q − M⁻¹ ∇Cᵀ δλ), the
+/// projection moved the control points by −M⁻¹ ∇Cᵀ Λ, i.e. changed their momentum by
+/// −∇Cᵀ Λ / h: the group exerted the generalised force F = −∇Cᵀ Λ / h² over the step.
+struct ConstraintRecord {
+  std::string name;  ///< "length", "pin0", "glue1", a clamp's name
+  std::string kind;  ///< "length", "pin", "glue", "clamp"
+  int rows = 0;
+  Eigen::VectorXd multipliers;  ///< Λ per row (g·cm for point rows, g·cm² for length rows)
+  /// Σ_k F_k over the control points (dyn): the total force the group exerts on the yarns.
+  /// A glue's two points feel opposite forces; its `force` is the one on point a.
+  Eigen::Vector3d force = Eigen::Vector3d::Zero();
+  /// Σ_k (q_k − about) × F_k (dyn·cm); exact for point rows, whose F is B(t)-weighted.
+  Eigen::Vector3d torque = Eigen::Vector3d::Zero();
+  Eigen::Vector3d about = Eigen::Vector3d::Zero();  ///< torque reference point (cm)
+  double max_violation = 0;                         ///< max |C| over the rows after the step
+};
+
+/// The last projection.
+struct ProjectionRecord {
+  bool converged = true;
+  int iterations = 0;
+  double residual = 0;  ///< max |C| at the end (all groups)
+};
+
+struct StepData {
+  long long steps = 0;  ///< steps taken by this simulator
+  double time = 0;      ///< time of the recorded state (s)
+  // --- force records, at the recorded state
+  double kinetic_energy = 0;    ///< ½ vᵀ M v (erg)
+  double potential_energy = 0;  ///< Σ term energies (erg)
+  std::vector<TermRecord> terms;
+  ContactRecord contact;
+  double max_violation = 0;  ///< max |C| over every constraint group at the state
+  // --- step records, of the step that produced it
+  ProjectionRecord projection;
+  std::vector<ConstraintRecord> constraints;
+  /// wall seconds per stage, summed since the simulator's timings were reset: each term's
+  /// name, "projection", each filter's name, "record"
+  std::map<std::string, double> stage_seconds;
+  /// per-step notes that did not stop the step (e.g. the projection nearly ran out of
+  /// iterations, yarns came closer than half the contact distance)
+  std::vector<std::string> warnings;
+
+  /// The record of a term, or nullptr.
+  const TermRecord* term(const std::string& name) const {
+    for (const TermRecord& t : terms)
+      if (t.name == name) return &t;
+    return nullptr;
+  }
+  /// The record of a constraint group, or nullptr.
+  const ConstraintRecord* constraint(const std::string& name) const {
+    for (const ConstraintRecord& c : constraints)
+      if (c.name == name) return &c;
+    return nullptr;
+  }
+};
+
+}  // namespace knit

@@ -1,0 +1,198 @@
+#include "knit/recipes/relax_knit.hpp"
+
+#include <filesystem>
+#include <fstream>
+#include <memory>
+
+#include "knit/analysis/fabric_shape.hpp"
+#include "knit/filters/nonrigid_damping.hpp"
+#include "knit/io/run_dir.hpp"
+#include "knit/io/state_file.hpp"
+#include "knit/pattern/pattern.hpp"
+
+namespace knit {
+
+namespace fs = std::filesystem;
+
+Params relax_knit_params() {
+  Params p = Params::relaxation();
+  p.gravity.setZero();
+  p.material.k_global = RELAX_K_GLOBAL;
+  return p;
+}
+
+Params relax_yarns_params() {
+  Params p = Params::relaxation();
+  p.gravity.setZero();
+  p.solver.time_step = 1.0 / 25000;
+  return p;
+}
+
+namespace {
+
+State generated_state(const GeneratedKnit& knit) {
+  State state;
+  state.q =
+      Eigen::Map<const Eigen::VectorXd>(knit.control_points.data(), knit.control_points.size());
+  state.v = Eigen::VectorXd::Zero(state.q.size());
+  return state;
+}
+
+// after the run: relaxed.kstate beside final.kstate
+void copy_relaxed(const std::string& out_dir) {
+  if (out_dir.empty()) return;
+  fs::copy_file(fs::path(out_dir) / "final.kstate", fs::path(out_dir) / "relaxed.kstate",
+                fs::copy_options::overwrite_existing);
+}
+
+}  // namespace
+
+State read_resumed_knit_state(const std::string& path, const std::string& pattern,
+                              const KnitOptions& options) {
+  const GeneratedKnit knit = generate_knit(load_pattern(pattern), options);
+  const bool in_the_round = options.in_the_round;
+  const StateFile f = read_state_file(path);
+  if (f.knit) {
+    // files written since the knit block exists say what they are
+    if (f.knit->pattern != pattern)
+      throw std::invalid_argument("--resume " + path + ": it was relaxed from pattern " +
+                                  f.knit->pattern + ", not " + pattern);
+    if (f.knit->in_the_round != in_the_round)
+      throw std::invalid_argument("--resume " + path + ": it was knitted " +
+                                  (in_the_round ? "flat" : "in the round") + "; give " +
+                                  (in_the_round ? "no --round" : "--round") + " to go on");
+  } else {
+    // older files: the run that wrote the file names its pattern in its summary (DIR/ or
+    // DIR/frames/)
+    for (const fs::path& dir :
+         {fs::path(path).parent_path(), fs::path(path).parent_path().parent_path()}) {
+      std::ifstream in(dir / "summary.json");
+      if (!in) continue;
+      const nlohmann::json s = nlohmann::json::parse(in, nullptr, false);
+      if (s.is_object() && s.contains("pattern") && s["pattern"].is_string() &&
+          s["pattern"].get<std::string>() != pattern)
+        throw std::invalid_argument("--resume " + path + ": it was relaxed from pattern " +
+                                    s["pattern"].get<std::string>() + " (" +
+                                    (dir / "summary.json").string() + "), not " + pattern);
+      if (s.is_object() && s.contains("in_the_round") && s["in_the_round"].is_boolean() &&
+          s["in_the_round"].get<bool>() != in_the_round)
+        throw std::invalid_argument("--resume " + path + ": it was knitted " +
+                                    (in_the_round ? "flat" : "in the round") + " (" +
+                                    (dir / "summary.json").string() + "); give " +
+                                    (in_the_round ? "no --round" : "--round") + " to go on");
+      break;
+    }
+  }
+  const int expected = static_cast<int>(knit.control_points.cols());
+  if (f.yarn_cp_counts.size() != 1 || f.num_cp() != expected)
+    throw std::invalid_argument("--resume " + path + ": it holds " +
+                                std::to_string(f.yarn_cp_counts.size()) + " yarn(s) and " +
+                                std::to_string(f.num_cp()) + " control points, but " + pattern +
+                                " at this size has 1 yarn and " + std::to_string(expected) +
+                                " (give the --rows, --cols and options of the first run)");
+  for (size_t i = 0; i < f.stitch.size(); ++i)
+    if (f.stitch[i].row != knit.stitch[i].row || f.stitch[i].col != knit.stitch[i].col)
+      throw std::invalid_argument("--resume " + path + ": segment " + std::to_string(i) +
+                                  " belongs to stitch (" + std::to_string(f.stitch[i].row) + ", " +
+                                  std::to_string(f.stitch[i].col) + "), but to (" +
+                                  std::to_string(knit.stitch[i].row) + ", " +
+                                  std::to_string(knit.stitch[i].col) + ") in " + pattern);
+  return f.state;
+}
+
+KnitRelaxation setup_knit_relaxation(const std::string& pattern_name, const RelaxKnitOptions& o) {
+  if (!(o.shrink >= 0.5 && o.shrink <= 1.0))
+    throw std::invalid_argument("shrink: expected a factor in [0.5, 1], got " +
+                                std::to_string(o.shrink));
+  KnitRelaxation r;
+  r.knit = generate_knit(load_pattern(pattern_name), o.knit);
+  Model model = build_knit_model(r.knit, o.params, o.shrink, o.glue_close_time);
+  model.knit = KnitInfo{pattern_name,
+                        o.knit.rows,
+                        o.knit.cols,
+                        o.knit.in_the_round,
+                        o.knit.segments_per_stitch,
+                        o.knit.stitch_size_cm,
+                        o.shrink};
+  r.state = o.resume ? *o.resume : generated_state(r.knit);
+  if (r.state.q.size() != model.num_dof() || r.state.v.size() != model.num_dof())
+    throw std::invalid_argument("the state to resume from does not match the knit's size");
+  r.sim = std::make_unique<Simulator>(std::move(model));
+  r.sim->add_filter(
+      std::make_unique<NonRigidDampingFilter>(r.sim->model(), o.params.material.alpha_small,
+                                              o.params.material.alpha_large, o.knit.in_the_round));
+  return r;
+}
+
+RelaxResult relax_knit(const std::string& pattern_name, const RelaxKnitOptions& o) {
+  // everything is validated before anything is written
+  KnitRelaxation setup = setup_knit_relaxation(pattern_name, o);
+  const GeneratedKnit& knit = setup.knit;
+  Simulator& sim = *setup.sim;
+  const Model& model = sim.model();
+  RelaxResult result{model, setup.state, {}};
+  const std::string& out = o.run.out_dir;
+  if (!out.empty()) {
+    prepare_run_directory(out, o.run.overwrite);
+    write_state_file((fs::path(out) / "initial.kstate").string(),
+                     make_state_file(model, result.state));
+  }
+  const FabricShape initial = measure_fabric(model, generated_state(knit).q);
+
+  nlohmann::json extra = {{"pattern", pattern_name},
+                          {"rows", o.knit.rows},
+                          {"cols", o.knit.cols},
+                          {"in_the_round", o.knit.in_the_round},
+                          {"segments_per_stitch", o.knit.segments_per_stitch},
+                          {"shrink", o.shrink},
+                          {"contact_points", o.params.discretisation.contact_points},
+                          {"k_global", o.params.material.k_global},
+                          {"alpha_small", o.params.material.alpha_small},
+                          {"alpha_large", o.params.material.alpha_large},
+                          {"generated",
+                           {{"stitch_width_cm", knit.stitch_width_cm},
+                            {"row_height_cm", knit.row_height_cm},
+                            {"loop_depth_cm", knit.loop_depth_cm},
+                            {"loop_length_cm", knit.loop_length_cm},
+                            {"min_distance_ratio", knit.min_distance_ratio},
+                            {"shape", to_json(initial)}}}};
+  for (const auto& [k, v] : o.extra.items()) extra[k] = v;
+  result.report = relax(sim, result.state, o.run, extra,
+                        [&](Simulator&, const State& st, nlohmann::json& summary) {
+                          const nlohmann::json shape = to_json(measure_fabric(model, st.q));
+                          for (const auto& [k, v] : shape.items()) summary[k] = v;
+                        });
+  copy_relaxed(out);
+  return result;
+}
+
+RelaxResult relax_yarns(const std::string& path, const RelaxYarnsOptions& o) {
+  if (!(o.shrink >= 0.5 && o.shrink <= 1.0))
+    throw std::invalid_argument("shrink: expected a factor in [0.5, 1], got " +
+                                std::to_string(o.shrink));
+  Params params = o.params;
+  params.material.radius = o.import.radius;
+  ModelBuilder builder;
+  for (const ImportedYarn& y : import_yarns(path, o.import)) builder.add_yarn(y.control_points);
+  const Model model = builder.build(params, o.shrink);
+  RelaxResult result{model, {}, {}};
+  result.state.q = builder.positions();
+  result.state.v = Eigen::VectorXd::Zero(result.state.q.size());
+  const std::string& out = o.run.out_dir;
+  if (!out.empty()) {
+    prepare_run_directory(out, o.run.overwrite);
+    write_state_file((fs::path(out) / "initial.kstate").string(),
+                     make_state_file(model, result.state));
+  }
+  Simulator sim(model);
+  nlohmann::json extra = {{"from", path},
+                          {"shrink", o.shrink},
+                          {"contact_points", params.discretisation.contact_points},
+                          {"k_global", params.material.k_global}};
+  for (const auto& [k, v] : o.extra.items()) extra[k] = v;
+  result.report = relax(sim, result.state, o.run, extra);
+  copy_relaxed(out);
+  return result;
+}
+
+}  // namespace knit

@@ -1,0 +1,36 @@
+#include "knit/recipes/simulate_scene.hpp"
+
+#include "knit/filters/nonrigid_damping.hpp"
+#include "knit/io/run_dir.hpp"
+
+namespace knit {
+
+std::unique_ptr<Simulator> make_scene_simulator(const Scene& scene) {
+  auto sim = std::make_unique<Simulator>(scene.model);
+  const Material& m = scene.model.params.material;
+  for (const SceneKnit& k : scene.knits)
+    sim->add_filter(std::make_unique<NonRigidDampingFilter>(sim->model(), m.alpha_small,
+                                                            m.alpha_large, k.in_the_round));
+  return sim;
+}
+
+RunReport simulate_scene(Scene& scene, const SimulateOptions& o) {
+  auto sim = make_scene_simulator(scene);
+  if (!o.out_dir.empty()) prepare_run_directory(o.out_dir, o.overwrite);
+  RunOptions run;
+  run.duration = scene.duration;
+  run.output_every = scene.output_every;
+  run.out_dir = o.out_dir;
+  run.progress = o.progress;
+  run.write_frames = o.write_frames;
+  run.extra = o.extra;
+  if (!scene.knits.empty()) {
+    nlohmann::json knits = nlohmann::json::array();
+    for (const SceneKnit& k : scene.knits)
+      knits.push_back({{"state", k.source}, {"yarn", k.yarn}, {"in_the_round", k.in_the_round}});
+    run.extra["knits"] = knits;
+  }
+  return run_simulation(*sim, scene.state, run);
+}
+
+}  // namespace knit

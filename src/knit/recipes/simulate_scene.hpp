@@ -1,0 +1,29 @@
+#pragma once
+// Recipe: "simulate a scene". The scene's model with the default terms (gravity, bending,
+// length, global damping when k_global > 0, yarn–yarn contact), and for a placed knit the
+// non-rigid damping filter built from its stitch coordinates (α_small, α_large of the
+// scene's material), run for the scene's duration with its time step.
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "knit/scene/scene.hpp"
+#include "knit/solver/runner.hpp"
+
+namespace knit {
+
+/// The simulator for a scene (see above), ready to step scene.state.
+std::unique_ptr<Simulator> make_scene_simulator(const Scene& scene);
+
+struct SimulateOptions {
+  std::string out_dir;     ///< empty: write nothing
+  bool overwrite = false;  ///< empty a directory that holds another run's files first
+  bool progress = true;    ///< progress line on stderr
+  bool write_frames = true;
+  nlohmann::json extra = nlohmann::json::object();  ///< merged into the summary
+};
+
+/// Runs `scene` from scene.state (which ends as the last state) for scene.duration.
+RunReport simulate_scene(Scene& scene, const SimulateOptions& options);
+
+}  // namespace knit
