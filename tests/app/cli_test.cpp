@@ -203,3 +203,32 @@ TEST(Cli, RenderingARunDirectoryRendersItsFrames) {
 }
 
 }  // namespace
+
+namespace {
+
+// A run never mixes its files with another run's: a directory holding files is refused
+// (nothing in it touched) unless --overwrite, which empties it first.
+TEST(Cli, RunDirectoriesAreNeverMixed) {
+  const std::string out = temp_dir("cli_mixed");
+  const std::string pendulum = std::string(KNIT_EXAMPLES) + "/pendulum.json --quiet";
+  ASSERT_EQ(run("simulate " + pendulum + " --duration 0.05 --out " + out).code, 0);
+  ASSERT_TRUE(fs::exists(out + "/frames/state_000005.kstate"));
+  const Result again = run("simulate " + pendulum + " --duration 0.01 --out " + out);
+  EXPECT_EQ(again.code, 1);
+  EXPECT_NE(again.output.find("--overwrite"), std::string::npos) << again.output;
+  EXPECT_TRUE(fs::exists(out + "/frames/state_000005.kstate")) << "the earlier run was touched";
+  const Result over = run("simulate " + pendulum + " --duration 0.01 --overwrite --out " + out);
+  ASSERT_EQ(over.code, 0) << over.output;
+  EXPECT_FALSE(fs::exists(out + "/frames/state_000005.kstate")) << "old frames left behind";
+  EXPECT_TRUE(fs::exists(out + "/frames/state_000001.kstate"));
+  const Result relax = run("relax garter --rows 2 --cols 2 --max-time 0.001 --quiet --out " + out);
+  EXPECT_EQ(relax.code, 1);
+  EXPECT_NE(relax.output.find("already holds files"), std::string::npos) << relax.output;
+  for (const char* bad : {"/", "~"}) {
+    const Result r = run("simulate " + pendulum + " --duration 0.001 --overwrite --out " + bad);
+    EXPECT_EQ(r.code, 1) << bad;
+    EXPECT_NE(r.output.find("refusing"), std::string::npos) << r.output;
+  }
+}
+
+}  // namespace

@@ -6,6 +6,7 @@
 #include <fstream>
 
 #include "fd_check.hpp"
+#include "knit/recipes/relax_knit.hpp"
 
 namespace knit {
 namespace {
@@ -73,6 +74,59 @@ TEST(StateFile, TruncatedAndCorruptFilesNameTheOffset) {
     EXPECT_NE(std::string(e.what()).find("version 99"), std::string::npos) << e.what();
   }
   EXPECT_THROW(read_state_file(path + ".missing"), std::runtime_error);
+}
+
+// a generated knit's state carries what a later run needs: pattern, size, shrink, rest
+// lengths and glues (with their closing gaps)
+TEST(StateFile, KnitRoundTrips) {
+  const std::string path = ::testing::TempDir() + "/knit.kstate";
+  RelaxKnitOptions o;
+  o.knit.rows = 4;
+  o.knit.cols = 5;
+  o.knit.in_the_round = true;
+  o.shrink = 0.9;
+  const KnitRelaxation r = setup_knit_relaxation("rib2x2", o);
+  const Model& m = r.sim->model();
+  ASSERT_TRUE(m.knit.has_value());
+  write_state_file(path, make_state_file(m, r.state));
+  const StateFile g = read_state_file(path);
+  ASSERT_TRUE(g.knit.has_value());
+  EXPECT_EQ(g.knit->pattern, "rib2x2");
+  EXPECT_EQ(g.knit->rows, 4);
+  EXPECT_EQ(g.knit->cols, 5);
+  EXPECT_TRUE(g.knit->in_the_round);
+  EXPECT_EQ(g.knit->segments_per_stitch, 8);
+  EXPECT_EQ(g.knit->shrink, 0.9);
+  EXPECT_EQ(g.rest_length, m.rest_length);
+  ASSERT_EQ(g.glues.size(), m.glues.size());
+  ASSERT_FALSE(g.glues.empty());
+  for (size_t k = 0; k < g.glues.size(); ++k) {
+    EXPECT_EQ(g.glues[k].a.segment, m.glues[k].a.segment);
+    EXPECT_EQ(g.glues[k].b.t, m.glues[k].b.t);
+    EXPECT_EQ(g.glues[k].gap, m.glues[k].gap);
+    EXPECT_EQ(g.glues[k].close_time, m.glues[k].close_time);
+  }
+  // every truncation is refused with an offset
+  const auto size = std::filesystem::file_size(path);
+  for (auto cut : {size - 5, size - 40, size - 8 * g.rest_length.size()}) {
+    std::filesystem::resize_file(path, cut);
+    EXPECT_THROW(read_state_file(path), std::runtime_error) << cut;
+    write_state_file(path, make_state_file(m, r.state));
+  }
+}
+
+// files written before the knit block existed (version 1) are still read
+TEST(StateFile, ReadsVersionOne) {
+  for (const char* name : {"helix.kstate", "two-helices.kstate"}) {
+    const StateFile f =
+        read_state_file(std::string(KNIT_TEST_DATA) + "/../../fuzz/seeds/kstate/" + name);
+    EXPECT_FALSE(f.knit.has_value()) << name;
+    EXPECT_GT(f.num_cp(), 0) << name;
+  }
+  const StateFile ref =
+      read_state_file(std::string(KNIT_TEST_DATA) + "/reference/relax_stockinette_6x6.kstate");
+  EXPECT_FALSE(ref.knit.has_value());
+  EXPECT_FALSE(ref.stitch.empty());
 }
 
 }  // namespace

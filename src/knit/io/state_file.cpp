@@ -222,7 +222,7 @@ StateFile read_state_file(const std::string& path) {
       for (const YarnPoint& p : {glue.a, glue.b})
         if (p.segment < 0 || p.segment >= nseg || !(p.t >= 0 && p.t <= 1))
           r.fail("glue " + std::to_string(g) + " names a point off the yarn");
-      if (!glue.gap.allFinite() || !std::isfinite(glue.close_time) || glue.close_time < 0)
+      if (!glue.gap.allFinite() || std::isnan(glue.close_time) || glue.close_time < 0)
         r.fail("glue " + std::to_string(g) + " has a bad gap or close time");
       f.glues.push_back(glue);
     }

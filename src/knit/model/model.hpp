@@ -51,7 +51,8 @@ struct Pin {
 
 /// Glue constraint y(a) − y(b) = g(time). The gap g starts at `gap` and closes linearly
 /// to 0 over `close_time` seconds, so a yarn end laid next to the point it is glued to is
-/// drawn in smoothly instead of snapped (which would kink the yarn's light end).
+/// drawn in smoothly instead of snapped (which would kink the yarn's light end). With
+/// close_time = ∞ the gap is held as it is.
 struct Glue {
   YarnPoint a, b;
   Eigen::Vector3d gap = Eigen::Vector3d::Zero();  ///< cm at time 0

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include <filesystem>
 
@@ -198,9 +199,14 @@ PlacedKnit parse_knit(const JsonReader& k, const std::string& scene_path) {
   out.stitch = f.stitch;
   out.in_the_round = f.knit && f.knit->in_the_round;
   for (Glue g : f.glues) {
-    // a relaxed knit's glues have closed: they hold the ends where they are
-    g.gap.setZero();
-    g.close_time = 0;
+    // the glues hold the ends where they are (closed, for a knit relaxed past its glue
+    // closing time): the gap stays the placed yarn's own, so the knit starts on its
+    // constraints
+    auto at = [&](const YarnPoint& p) -> Eigen::Vector3d {
+      return out.points.middleCols<4>(p.segment) * bspline_basis(p.t);
+    };
+    g.gap = at(g.a) - at(g.b);
+    g.close_time = std::numeric_limits<double>::infinity();
     out.glues.push_back(g);
   }
   return out;
@@ -238,6 +244,10 @@ std::vector<YarnPoint> parse_clamp_points(const JsonReader& c, const ModelBuilde
   if (lo < 0 || hi >= extent || lo > hi)
     range.fail("expected " + std::string(rows ? "rows" : "columns") + " within [0, " +
                std::to_string(extent - 1) + "] (negative counts from the end), first ≤ last");
+  // every segment's start in the range: with the length constraints these rows are
+  // redundant (each segment adds 3 dof and 4 rows), which the projection's ridge solves
+  // while the clamp moves rigidly; the clamp's total force does not depend on how the
+  // redundant rows share it
   for (int i = 0; i < static_cast<int>(stitch.size()); ++i) {
     const int v = rows ? stitch[i].row : stitch[i].col;
     if (v >= lo && v <= hi) points.push_back({i, 0.0});
