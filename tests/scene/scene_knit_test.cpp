@@ -3,6 +3,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <set>
 
 #include "knit/io/state_file.hpp"
 #include "knit/recipes/relax_knit.hpp"
@@ -76,10 +77,23 @@ TEST(SceneKnit, PlacedAtRestWithItsStitchesAndGlues) {
   EXPECT_LT(FastProjection::max_length_violation(m, scene.state.q), 1e-12);
   // the top row's segments, one point each
   ASSERT_EQ(m.clamps.size(), 1u);
-  int top = 0;
-  for (const StitchCoord& s : m.stitch) top += s.row == 3;
-  EXPECT_EQ(static_cast<int>(m.clamps[0].points.size()), top);
-  for (const YarnPoint& p : m.clamps[0].points) EXPECT_EQ(m.stitch[p.segment].row, 3);
+  std::set<int> top;
+  for (int i = 0; i < m.num_seg(); ++i)
+    if (m.stitch[i].row == 3)
+      for (int a = 0; a < 4; ++a) top.insert(m.seg_cp[i] + a);
+  EXPECT_TRUE(m.clamps[0].points.empty());
+  EXPECT_EQ(std::set<int>(m.clamps[0].control_points.begin(), m.clamps[0].control_points.end()),
+            top);
+  // the clamp fixes the top row's shape: those segments' length rows are left out
+  int held_segments = 0;
+  for (int i = 0; i < m.num_seg(); ++i) {
+    bool all = true;
+    for (int a = 0; a < 4; ++a) all = all && top.count(m.seg_cp[i] + a);
+    held_segments += all;
+  }
+  ASSERT_GT(held_segments, 0);
+  EXPECT_EQ(m.constraint_groups[0]->name(), "length");
+  EXPECT_EQ(m.constraint_groups[0]->rows(), m.num_seg() - held_segments);
   ASSERT_EQ(scene.knits.size(), 1u);
   EXPECT_FALSE(scene.knits[0].in_the_round);
 }

@@ -3,7 +3,9 @@
 //   C_i = 1 − (1/ℓ_i) ∫₀¹ |y_i'(t)| dt      (dimensionless)
 // Its multiplier λ_i (g·cm², summed over a step's projection iterations) is the segment's
 // tension impulse: the force along the yarn is of order λ_i / (ℓ_i h²).
+#include <vector>
 #include "knit/constraints/group.hpp"
+
 #include "knit/spline/basis.hpp"
 
 namespace knit {
@@ -12,11 +14,13 @@ namespace knit {
 double length_constraint(const Vector12d& x, double rest_length, const QuadratureTable& quad,
                          Vector12d* grad);
 
-/// Every segment's C_i as one group ("length"), row i = segment i. Its rows exert no net
-/// force or torque on a yarn (arclength is invariant under rigid motion).
+/// The segments' C_i as one group ("length"): every segment (row i = segment i), or the
+/// given ones in order. Its rows exert no net force or torque on a yarn (arclength is
+/// invariant under rigid motion).
 class LengthGroup : public ConstraintGroup {
  public:
   explicit LengthGroup(const Model& model);
+  LengthGroup(const Model& model, std::vector<int> segments);
   std::string_view kind() const override { return "length"; }
   int rows() const override { return m_rows; }
   void jacobian_structure(const Model& model,
@@ -27,6 +31,7 @@ class LengthGroup : public ConstraintGroup {
 
  private:
   int m_rows = 0;
+  std::vector<int> m_segments;  // empty: every segment, row i = segment i
 };
 
 }  // namespace knit

@@ -131,16 +131,26 @@ Model ModelBuilder::build(const Params& params, double rest_scale) const {
   for (size_t k = 0; k < m_clamps.size(); ++k) {
     Clamp c = m_clamps[k];
     if (c.name.empty()) c.name = "clamp" + std::to_string(k);
-    if (c.points.empty()) throw std::invalid_argument("clamp " + c.name + ": it holds no points");
+    if (c.points.empty() && c.control_points.empty())
+      throw std::invalid_argument("clamp " + c.name + ": it holds no points");
     for (size_t p = 0; p < c.points.size(); ++p)
       check_point(c.points[p], "clamp " + c.name + " point " + std::to_string(p));
+    std::vector<int> sorted = c.control_points;
+    std::sort(sorted.begin(), sorted.end());
+    for (size_t k = 0; k < sorted.size(); ++k) {
+      if (sorted[k] < 0 || sorted[k] >= cp)
+        throw std::out_of_range("clamp " + c.name + ": control point " + std::to_string(sorted[k]) +
+                                " does not exist (the model has " + std::to_string(cp) + ")");
+      if (k > 0 && sorted[k] == sorted[k - 1])
+        throw std::invalid_argument("clamp " + c.name + ": control point " +
+                                    std::to_string(sorted[k]) + " is held twice");
+    }
     c.rest.clear();
     c.centre.setZero();
-    for (const YarnPoint& p : c.points) {
-      c.rest.push_back(point_position(m, q, p));
-      c.centre += c.rest.back();
-    }
-    c.centre /= static_cast<double>(c.points.size());
+    for (const YarnPoint& p : c.points) c.rest.push_back(point_position(m, q, p));
+    for (int k : c.control_points) c.rest.push_back(q.segment<3>(3 * k));
+    for (const Eigen::Vector3d& r : c.rest) c.centre += r;
+    c.centre /= static_cast<double>(c.rest.size());
     for (size_t f = 1; f < c.keyframes.size(); ++f)
       if (!(c.keyframes[f].time > c.keyframes[f - 1].time))
         throw std::invalid_argument("clamp " + c.name + ": keyframe times must increase");
@@ -161,13 +171,27 @@ Model ModelBuilder::build(const Params& params, double rest_scale) const {
 
 void build_constraint_groups(Model& m) {
   m.constraint_groups.clear();
-  if (m.params.solver.length_constraints)
-    m.constraint_groups.push_back(std::make_shared<LengthGroup>(m));
+  // segments whose four control points are all held by clamps: their shape is fixed
+  std::vector<char> held(m.num_cp(), 0);
+  for (const Clamp& c : m.clamps)
+    for (int k : c.control_points) held[k] = 1;
+  auto fixed = [&](int seg) {
+    for (int a = 0; a < 4; ++a)
+      if (!held[m.seg_cp[seg] + a]) return false;
+    return true;
+  };
+  if (m.params.solver.length_constraints) {
+    std::vector<int> free_segments;
+    for (int i = 0; i < m.num_seg(); ++i)
+      if (!fixed(i)) free_segments.push_back(i);
+    m.constraint_groups.push_back(std::make_shared<LengthGroup>(m, std::move(free_segments)));
+  }
   for (size_t k = 0; k < m.pins.size(); ++k)
     m.constraint_groups.push_back(std::make_shared<PinGroup>("pin" + std::to_string(k), m.pins[k]));
   for (size_t k = 0; k < m.glues.size(); ++k)
-    m.constraint_groups.push_back(
-        std::make_shared<GlueGroup>("glue" + std::to_string(k), m.glues[k]));
+    if (!fixed(m.glues[k].a.segment) || !fixed(m.glues[k].b.segment))
+      m.constraint_groups.push_back(
+          std::make_shared<GlueGroup>("glue" + std::to_string(k), m.glues[k]));
   for (const Clamp& c : m.clamps) m.constraint_groups.push_back(std::make_shared<ClampGroup>(c));
 }
 

@@ -76,13 +76,19 @@ struct Keyframe {
 /// and after the last; no keyframes: held still).
 struct Clamp {
   std::string name;
-  std::vector<YarnPoint> points;
-  std::vector<Eigen::Vector3d> rest;                 ///< each point's position at time 0 (cm)
+  std::vector<YarnPoint> points;  ///< yarn points held
+  /// control points held (global indices): a knit's rows or columns are held by the
+  /// control points of their segments, which fixes those segments' shape exactly —
+  /// their length rows, and glues whose points all lie on such segments, are then left to
+  /// the clamp (see build_constraint_groups)
+  std::vector<int> control_points;
+  /// the position at time 0 (cm) of each held point, then of each held control point
+  std::vector<Eigen::Vector3d> rest;
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();  ///< centroid of `rest`: the pivot (cm)
   std::vector<Keyframe> keyframes;                   ///< by increasing time
   /// The frame's pose at `time` (translation and rotation, interpolated).
   Keyframe pose(double time) const;
-  /// Where point k is held at `time` (cm).
+  /// Where held point k (points first, then control points) is at `time` (cm).
   Eigen::Vector3d target(int k, double time) const {
     const Keyframe p = pose(time);
     return centre + p.translation + p.rotation * (rest[k] - centre);
@@ -188,7 +194,11 @@ double segment_arclength(const Vector12d& x, const QuadratureTable& quad);
 /// A copy of `model` with every rest length multiplied by `scale` (mass unchanged).
 Model scale_rest_lengths(const Model& model, double scale);
 
-/// Builds model.constraint_groups from its parameters, pins, glues and clamps.
+/// Builds model.constraint_groups from its parameters, pins, glues and clamps. Rows that a
+/// clamp's held control points make redundant are left out: the length row of a segment
+/// whose four control points are all held, and a glue whose two points lie on such
+/// segments (both are fixed by the clamps already, and redundant rows make the split of
+/// forces between groups arbitrary).
 void build_constraint_groups(Model& model);
 
 /// Position y(s) of a yarn point.

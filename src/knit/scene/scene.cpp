@@ -212,24 +212,23 @@ PlacedKnit parse_knit(const JsonReader& k, const std::string& scene_path) {
   return out;
 }
 
-// the yarn points a clamp holds: "rows" or "cols" [first, last] of a knit's stitches
-// (negative counts from the end: -1 is the last), one point at the start of each segment
-// in them; or "points", a list of yarn points
-std::vector<YarnPoint> parse_clamp_points(const JsonReader& c, const ModelBuilder& b,
-                                          const std::vector<StitchCoord>& stitch,
-                                          const std::vector<SceneKnit>& knits) {
+// what a clamp holds: "rows" or "cols" [first, last] of a knit's stitches (negative
+// counts from the end: -1 is the last) hold the control points of every segment in them;
+// "points" lists yarn points
+void parse_clamp_points(const JsonReader& c, const ModelBuilder& b,
+                        const std::vector<StitchCoord>& stitch, const std::vector<SceneKnit>& knits,
+                        Clamp& clamp) {
   const int kinds = c.has("rows") + c.has("cols") + c.has("points");
   if (kinds != 1) c.fail("expected exactly one of \"rows\", \"cols\", \"points\"");
-  std::vector<YarnPoint> points;
   if (c.has("points")) {
     const JsonReader list = c.at("points");
     list.require_array(1);
     for (size_t k = 0; k < list.size(); ++k) {
       const JsonReader p = list.at(k);
       p.allow_keys({"yarn", "segment", "t", "at"});
-      points.push_back(parse_point(p, b, true));
+      clamp.points.push_back(parse_point(p, b, true));
     }
-    return points;
+    return;
   }
   const bool rows = c.has("rows");
   const JsonReader range = c.at(rows ? "rows" : "cols");
@@ -244,15 +243,23 @@ std::vector<YarnPoint> parse_clamp_points(const JsonReader& c, const ModelBuilde
   if (lo < 0 || hi >= extent || lo > hi)
     range.fail("expected " + std::string(rows ? "rows" : "columns") + " within [0, " +
                std::to_string(extent - 1) + "] (negative counts from the end), first ≤ last");
-  // every segment's start in the range: with the length constraints these rows are
-  // redundant (each segment adds 3 dof and 4 rows), which the projection's ridge solves
-  // while the clamp moves rigidly; the clamp's total force does not depend on how the
-  // redundant rows share it
-  for (int i = 0; i < static_cast<int>(stitch.size()); ++i) {
-    const int v = rows ? stitch[i].row : stitch[i].col;
-    if (v >= lo && v <= hi) points.push_back({i, 0.0});
+  // the control points of the segments in range, each once: segment i of a yarn whose
+  // first segment is s0 and first control point c0 uses c0 + (i − s0) … + 3
+  std::vector<int> cps;
+  int seg0 = 0, cp0 = 0;
+  for (int y = 0; y < b.num_yarns(); ++y) {
+    const int nseg = (y + 1 < b.num_yarns() ? b.segment_index(y + 1, 0) : b.num_segments()) - seg0;
+    for (int i = seg0; i < seg0 + nseg; ++i) {
+      const int v = rows ? stitch[i].row : stitch[i].col;
+      if (v >= lo && v <= hi)
+        for (int a = 0; a < 4; ++a) cps.push_back(cp0 + (i - seg0) + a);
+    }
+    seg0 += nseg;
+    cp0 += nseg + 3;
   }
-  return points;
+  std::sort(cps.begin(), cps.end());
+  cps.erase(std::unique(cps.begin(), cps.end()), cps.end());
+  clamp.control_points = std::move(cps);
 }
 
 std::vector<Keyframe> parse_keyframes(const JsonReader& r) {
@@ -421,7 +428,7 @@ Scene parse_scene(const nlohmann::json& doc, const std::string& source, const Pa
       if (std::find(names.begin(), names.end(), clamp.name) != names.end())
         cr.at("name").fail("two clamps are called \"" + clamp.name + "\"");
       names.push_back(clamp.name);
-      clamp.points = parse_clamp_points(cr, builder, stitch, scene.knits);
+      parse_clamp_points(cr, builder, stitch, scene.knits, clamp);
       if (cr.has("keyframes")) clamp.keyframes = parse_keyframes(cr.at("keyframes"));
       builder.add_clamp(clamp);
     }
