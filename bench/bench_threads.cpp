@@ -6,10 +6,12 @@
 #include "bench_util.hpp"
 
 int main(int argc, char** argv) {
-  std::string state;
+  std::string state = knit::bench::default_relaxed_state();
   int rows = 42, cols = 32, points = 20, steps = 10, max_threads = 2;
   CLI::App app{"bench_threads: the step benchmark on 1 and 2 threads"};
-  app.add_option("--state", state, "relaxed .kstate of a stockinette of the same size");
+  app.add_option("--state", state,
+                 "relaxed .kstate (default: the relaxed 42x32 stockinette in examples/knits; "
+                 "\"\" for generated geometry)");
   app.add_option("--rows", rows);
   app.add_option("--cols", cols);
   app.add_option("--contact-points", points);

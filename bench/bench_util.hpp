@@ -87,6 +87,12 @@ namespace knit::bench {
 /// constraints on, non-rigid damping on, gravity on: a relaxed knit read from `state_path`
 /// (a .kstate written by `knitsim relax`, placed as a scene places it), or, without one,
 /// the generated yarn of `pattern` at rows × cols with rest lengths from that geometry.
+/// The relaxed 42×32 stockinette kept in the repository: the default sample of the step
+/// benchmarks (a relaxed sample has about 2.5× the contact pairs of generated geometry).
+inline std::string default_relaxed_state() {
+  return std::string(KNIT_EXAMPLES) + "/knits/stockinette_42x32.kstate";
+}
+
 struct StepSetup {
   std::unique_ptr<Simulator> sim;
   State state;

@@ -42,6 +42,10 @@ class ConstraintGroup {
                                        double time) const {
     return Eigen::Vector3d::Zero();
   }
+  /// Whether the group can exert a net force or torque on the yarns. A group whose C is
+  /// invariant under rigid motion (inextensibility) cannot: its force and torque are zero
+  /// exactly and are not summed (only its multipliers are reported).
+  virtual bool exerts_net_force() const { return true; }
   /// Adjusts the generic report (see ConstraintRecord) where the group means something
   /// more specific; `h` is the step (s).
   virtual void finish_record(ConstraintRecord& record, double h) const {}

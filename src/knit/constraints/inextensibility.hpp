@@ -26,6 +26,7 @@ class LengthGroup : public ConstraintGroup {
   void jacobian_structure(const Model& model,
                           std::vector<Eigen::Triplet<double>>& entries) const override;
   bool jacobian_varies() const override { return true; }
+  bool exerts_net_force() const override { return false; }
   void evaluate(const Model& model, const Eigen::VectorXd& q, double time, double* c,
                 double* jacobian) const override;
 

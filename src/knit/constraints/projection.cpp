@@ -199,6 +199,7 @@ void FastProjection::record_groups(const Model& model, const Eigen::VectorXd& q,
     rec.about = group.torque_point(model, q, time);
     rec.force.setZero();
     rec.torque.setZero();
+    if (!group.exerts_net_force()) continue;
     // F_k = −Σ_r G_rk Λ_r / h², entry by entry
     for (int r = r0; r < r1; ++r)
       for (int p = outer[r]; p < outer[r + 1]; ++p) {

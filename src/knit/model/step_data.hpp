@@ -57,7 +57,8 @@ struct ConstraintRecord {
   int rows = 0;
   Eigen::VectorXd multipliers;  ///< Λ per row (g·cm for point rows, g·cm² for length rows)
   /// Σ_k F_k over the control points (dyn): the total force the group exerts on the yarns.
-  /// A glue's two points feel opposite forces; its `force` is the one on point a.
+  /// A glue's two points feel opposite forces; its `force` is the one on point a. Zero
+  /// (not summed) for the length group, which exerts no net force or torque.
   Eigen::Vector3d force = Eigen::Vector3d::Zero();
   /// Σ_k (q_k − about) × F_k (dyn·cm); exact for point rows, whose F is B(t)-weighted.
   Eigen::Vector3d torque = Eigen::Vector3d::Zero();
