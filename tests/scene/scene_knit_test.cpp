@@ -135,6 +135,9 @@ TEST(SceneKnit, BadKnitsAndClampsAreNamed) {
       {R"({"knits": [{"state": "scene_knit.kstate"}],
            "clamps": [{"rows": [0, 0], "keyframes": [{"time": 1}, {"time": 0.5}]}]})",
        "keyframes[1].time"},
+      {R"({"yarns": [{"line": {"from": [0,0,0], "to": [1,0,0], "segments": 4}}],
+           "params": {"alpha_large": 0.5}})",
+       "params.alpha_large: the non-rigid damping acts on a placed knit"},
   };
   for (const auto& [text, expected] : cases) {
     const std::string msg = message_of(text);

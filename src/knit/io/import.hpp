@@ -17,6 +17,8 @@
 #include <string_view>
 #include <vector>
 
+#include "knit/model/params.hpp"
+
 namespace knit {
 
 /// A yarn ready for a ModelBuilder: control points (3×m, cm, m ≥ 4) and radius (cm).
@@ -36,7 +38,7 @@ struct ImportOptions {
   /// radius (that of its first yarn) becomes `radius`; 1 when the file has no radius.
   double scale = 0;
   /// Yarn radius (cm) for files without one, and the target of the automatic scale.
-  double radius = 0.125;
+  double radius = Material{}.radius;  // the material default
   /// Spline segments per cm of (scaled) yarn. 0 (default): 1 / (2.5 r), so a segment is
   /// about 2.5 radii long. For r = 0.125 cm that is 3.2 segments/cm, i.e. a 0.31 cm
   /// segment, which matches the paper's 8 segments per stitch loop of ≈ 2.5 cm of yarn.

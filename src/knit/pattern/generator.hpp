@@ -26,7 +26,7 @@ struct KnitOptions {
   int cols = 6;                 ///< stitches per row (around the tube when in_the_round)
   int segments_per_stitch = 8;  ///< spline segments fitted to each stitch (≥ 4)
   bool in_the_round = false;    ///< knit a tube (helix, no turns) instead of a flat piece
-  double radius = 0.125;        ///< yarn radius r (cm)
+  double radius = Material{}.radius;  ///< yarn radius r (cm), the material default
   /// "Stitch size": yarn length per stitch (cm), the one knob a knitter turns by changing
   /// needles. When > 0 it scales the stitch width and row height together (the depth stays
   /// tied to the yarn) so that a plain (stockinette) loop uses this much yarn.

@@ -433,6 +433,14 @@ Scene parse_scene(const nlohmann::json& doc, const std::string& source, const Pa
       builder.add_clamp(clamp);
     }
   }
+  // the non-rigid damping filter acts on a placed knit's stitches: without one, its
+  // parameters would be read and ignored
+  if (scene.knits.empty() && root.has("params"))
+    for (const char* key : {"alpha_small", "alpha_large"})
+      if (root.at("params").has(key))
+        root.at("params").at(key).fail(
+            "the non-rigid damping acts on a placed knit's stitches, and this scene has no "
+            "\"knits\"");
   scene.model = builder.build(params);
   scene.state.q = q0;
   scene.state.v = Eigen::VectorXd::Zero(q0.size());
