@@ -159,3 +159,40 @@ TEST(SceneKnit, BadKnitsAndClampsAreNamed) {
 
 }  // namespace
 }  // namespace knit
+
+namespace knit {
+namespace {
+
+// A knit stretched between two clamps: the bottom row held, the top row pulled up and
+// turned. Every other force on the yarn is internal (bending, length, contact and its
+// damping, glue and length rows) or conserves momentum (the non-rigid damping keeps each
+// region's momentum), so each step changes the momentum by exactly h · (M g + the two
+// clamp forces) — Newton's second law for the whole sample, to round-off.
+TEST(SceneKnit, StretchedSampleObeysNewtonsSecondLaw) {
+  const KnitFile f;
+  Scene scene = parse(R"({"knits": [{"state": "scene_knit.kstate"}],
+      "clamps": [{"name": "bottom", "rows": [0, 0]},
+                 {"name": "top", "rows": [-1, -1],
+                  "keyframes": [{"time": 0}, {"time": 0.02, "translate": [0, 0.3, 0.1],
+                                              "rotate": {"axis": [0, 1, 0], "degrees": 5}}]}]})");
+  auto sim = make_scene_simulator(scene);
+  const Model& m = sim->model();
+  const double h = m.params.solver.time_step;
+  const Eigen::Vector3d weight = m.mass.sum() * m.params.gravity;
+  double worst = 0, scale = 0;
+  for (int i = 0; i < 300; ++i) {  // 0.025 s: pulled, then held
+    const Eigen::Vector3d p0 = sim->linear_momentum(scene.state);
+    const StepResult r = sim->step(scene.state);
+    ASSERT_TRUE(r.ok()) << i << ": " << r.message;
+    const Eigen::Vector3d dp = sim->linear_momentum(scene.state) - p0;
+    const Eigen::Vector3d f = weight + sim->data().constraint("bottom")->force +
+                              sim->data().constraint("top")->force;
+    worst = std::max(worst, (dp / h - f).norm());
+    scale = std::max(scale, sim->data().constraint("top")->force.norm());
+  }
+  ASSERT_GT(scale, weight.norm()) << "the pulled clamp should carry more than the weight";
+  EXPECT_LT(worst, 1e-8 * scale) << "largest |Δp/h − ΣF|, against max |F_top| = " << scale;
+}
+
+}  // namespace
+}  // namespace knit
