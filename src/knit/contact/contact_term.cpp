@@ -454,19 +454,30 @@ void ContactTerm::record(StepData& data) const {
   c.candidates_rebuilt = m_stats.candidates_rebuilt;
   c.pairs.clear();
   if (m_culling != ContactCulling::BVH) return;
+  // row i's pairs go to [offset[i], offset[i + 1]): filled in parallel, in (i, j) order
+  const int n = std::min<int>(m_num_seg, static_cast<int>(m_pairs.size()));
+  m_record_offset.resize(n + 1);
+  m_record_offset[0] = 0;
+  for (int i = 0; i < n; ++i)
+    m_record_offset[i + 1] = m_record_offset[i] + static_cast<long long>(m_pairs[i].size());
+  c.pairs.resize(m_record_offset[n]);
   const double inv_two_r = 1.0 / (2 * m_radius);
-  for (int i = 0; i < m_num_seg && i < static_cast<int>(m_pairs.size()); ++i)
-    for (const PairForce& pf : m_pairs[i]) {
-      ContactPairRecord& r = c.pairs.emplace_back();
-      r.seg_i = i;
-      r.seg_j = pf.j;
-      const double len = pf.delta.norm();
-      r.d = std::sqrt(pf.min_d2) * inv_two_r;
-      r.normal = len > 0 ? Eigen::Vector3d(pf.delta / len) : Eigen::Vector3d::Zero();
-      Eigen::Vector3d net = Eigen::Vector3d::Zero();
-      for (int a = 0; a < 4; ++a) net += pf.force_j.segment<3>(3 * a);
-      r.normal_force = r.normal.dot(net);
+  tbb::parallel_for(tbb::blocked_range<int>(0, n, 256), [&](const tbb::blocked_range<int>& range) {
+    for (int i = range.begin(); i < range.end(); ++i) {
+      long long k = m_record_offset[i];
+      for (const PairForce& pf : m_pairs[i]) {
+        ContactPairRecord& r = c.pairs[k++];
+        r.seg_i = i;
+        r.seg_j = pf.j;
+        const double len = pf.delta.norm();
+        r.d = std::sqrt(pf.min_d2) * inv_two_r;
+        r.normal = len > 0 ? Eigen::Vector3d(pf.delta / len) : Eigen::Vector3d::Zero();
+        Eigen::Vector3d net = Eigen::Vector3d::Zero();
+        for (int a = 0; a < 4; ++a) net += pf.force_j.segment<3>(3 * a);
+        r.normal_force = r.normal.dot(net);
+      }
     }
+  });
 }
 
 double ContactTerm::add_force_brute(const Model& model, const Eigen::VectorXd& q,

@@ -186,6 +186,7 @@ class ContactTerm : public Term {
   std::vector<RowStats> m_rows;
   std::vector<std::vector<ContactPointPair>> m_row_records;
   std::vector<ContactPointPair> m_point_pairs;
+  mutable std::vector<long long> m_record_offset;  // record(): first pair of each row
   SegmentAccumulator m_accumulator;
   ContactStats m_stats;
   ContactTimings m_timings;
