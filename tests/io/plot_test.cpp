@@ -72,5 +72,23 @@ TEST(PlotLog, WritesLabelledPlots) {
   fs::remove_all(dir);
 }
 
+// a log with a pin's and a clamp's force columns also gets forces.png
+TEST(PlotLog, PlotsConstraintForces) {
+  if (find_gnuplot().empty()) GTEST_SKIP() << "gnuplot is not installed";
+  const auto dir = test::temp_dir("plot-forces");
+  {
+    std::ofstream csv(dir / "log.csv");
+    csv << "time_s,kinetic_energy,potential_energy,max_violation,contact_pairs,"
+           "min_contact_distance,wall_s_per_step,energy_gravity,pin0_fx,pin0_fy,pin0_fz,"
+           "top_fx,top_fy,top_fz\n";
+    for (int k = 0; k < 20; ++k)
+      csv << k * 0.01 << ",1,2,1e-7,0,-1,0.01,-3," << k << ",0,50,0,0," << 100 + k << "\n";
+  }
+  const auto written = plot_log(dir.string());
+  ASSERT_EQ(written.size(), 5u);
+  EXPECT_TRUE(is_png(dir / "forces.png"));
+  fs::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace knit

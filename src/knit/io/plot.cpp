@@ -266,6 +266,38 @@ std::vector<std::string> plot_log(const std::string& dir) {
                   "plot " +
                   d + " u 1:7 w l ls 4 t 'wall time per step'\n");
   written.push_back(out("timing.png"));
+
+  // forces.png: |F| of every pin, glue and clamp (columns <group>_fx, _fy, _fz)
+  CsvTable forces;
+  forces.columns = {"time_s"};
+  std::vector<int> fx;
+  for (size_t c = 0; c + 2 < t.columns.size(); ++c) {
+    const std::string& name = t.columns[c];
+    if (name.size() > 3 && name.compare(name.size() - 3, 3, "_fx") == 0 &&
+        t.columns[c + 1] == name.substr(0, name.size() - 3) + "_fy" &&
+        t.columns[c + 2] == name.substr(0, name.size() - 3) + "_fz") {
+      forces.columns.push_back(name.substr(0, name.size() - 3));
+      fx.push_back(static_cast<int>(c));
+    }
+  }
+  if (!fx.empty()) {
+    for (size_t r = 0; r < t.rows.size(); ++r) {
+      std::vector<double> row = {data.rows[r][0]};
+      for (int c : fx)
+        row.push_back(std::sqrt(t.rows[r][c] * t.rows[r][c] + t.rows[r][c + 1] * t.rows[r][c + 1] +
+                                t.rows[r][c + 2] * t.rows[r][c + 2]));
+      forces.rows.push_back(std::move(row));
+    }
+    const std::string fdat = (tmp.path / "forces.dat").string();
+    write_data(forces, fdat);
+    std::string body = x + "set ylabel 'force (dyn)'\nset key top right box opaque\nplot ";
+    for (size_t g = 1; g < forces.columns.size(); ++g)
+      body += (g == 1 ? quoted(fdat) : std::string(", ''")) + " u 1:" + std::to_string(g + 1) +
+              " w l ls " + std::to_string((g - 1) % 6 + 1) + " t " +
+              quoted("|F| " + forces.columns[g]) + " noenhanced";
+    render_plot(gnuplot, tmp, out("forces.png"), "Constraint forces", body + "\n");
+    written.push_back(out("forces.png"));
+  }
   return written;
 }
 

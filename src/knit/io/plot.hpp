@@ -31,7 +31,8 @@ const std::vector<std::string>& log_columns();
 
 /// Plots `dir`/log.csv into `dir`: energy.png (kinetic, potential, total; erg),
 /// constraints.png (max violation), contact.png (pairs and min distance) and timing.png
-/// (wall time per step). Returns the paths written. Throws when gnuplot is missing or
+/// (wall time per step), and forces.png (|F| of every pin, glue and clamp, dyn) when the
+/// log has their columns. Returns the paths written. Throws when gnuplot is missing or
 /// the log is malformed.
 std::vector<std::string> plot_log(const std::string& dir);
 
