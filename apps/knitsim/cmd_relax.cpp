@@ -7,6 +7,7 @@
 
 #include "commands.hpp"
 #include "common.hpp"
+#include "knit/io/state_file.hpp"
 #include "knit/recipes/relax_knit.hpp"
 
 namespace knitsim {
@@ -33,8 +34,9 @@ void register_relax(CLI::App& app) {
   cmd->add_option("--from", o->from,
                   "relax yarns imported from a .yarns, .bcc or .obj file instead of a pattern");
   cmd->add_option("--resume", o->resume,
-                  "go on relaxing from a state written by an earlier `relax` of the same "
-                  "pattern and size (its relaxed.kstate or a frame); --max-time is then added")
+                  "go on relaxing from a state written by an earlier `relax` (its relaxed.kstate "
+                  "or a frame); its pattern, size and options are the defaults; --max-time is "
+                  "then added")
       ->check(CLI::ExistingFile);
   cmd->add_option(
          "--scale", o->yarns.import.scale,
@@ -81,13 +83,31 @@ void register_relax(CLI::App& app) {
   cmd->add_flag("--quiet,-q", o->quiet, "no progress line");
   add_export_option(cmd, o->export_format);
   cmd->callback([o, cmd]() {
+    auto given = [&](const char* name) { return cmd->count(name) > 0; };
+    if (!o->resume.empty() && o->from.empty()) {
+      // a state written by `relax` says what it is: the knit's options default to its own
+      const knit::StateFile f = knit::read_state_file(o->resume);
+      if (f.knit) {
+        if (o->pattern.empty()) o->pattern = f.knit->pattern;
+        if (!given("--rows")) o->knit.knit.rows = f.knit->rows;
+        if (!given("--cols")) o->knit.knit.cols = f.knit->cols;
+        if (!given("--round")) o->knit.knit.in_the_round = f.knit->in_the_round;
+        if (!given("--segments-per-stitch"))
+          o->knit.knit.segments_per_stitch = f.knit->segments_per_stitch;
+        if (!given("--stitch-size")) o->knit.knit.stitch_size_cm = f.knit->stitch_size_cm;
+        if (!given("--shrink")) o->shrink = f.knit->shrink;
+      } else if (o->pattern.empty()) {
+        throw std::invalid_argument("--resume " + o->resume +
+                                    ": the file does not say which knit it holds (written "
+                                    "before .kstate version 2): give the PATTERN and its options");
+      }
+    }
     if (o->from.empty() == o->pattern.empty())
       throw std::invalid_argument("relax: give either a PATTERN or --from FILE");
     o->run.out_dir = o->out;
     o->run.overwrite = o->overwrite;
     o->run.progress = !o->quiet;
     o->run.write_frames = !o->no_frames;
-    auto given = [&](const char* name) { return cmd->count(name) > 0; };
     auto control = make_thread_control(o->threads);
     knit::RelaxResult result;
     if (!o->from.empty()) {

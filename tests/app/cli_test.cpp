@@ -232,3 +232,33 @@ TEST(Cli, RunDirectoriesAreNeverMixed) {
 }
 
 }  // namespace
+
+namespace {
+
+// relaxed.kstate says which knit it holds: --resume alone goes on with its pattern, size
+// and shrink, exactly as naming them would
+TEST(Cli, ResumeTakesTheKnitFromTheStateFile) {
+  const std::string dir = temp_dir("cli_resume_alone");
+  const std::string opts = " --quiet --no-frames --threads 1 --max-time 0.005";
+  ASSERT_EQ(run("relax rib2x2 --rows 3 --cols 4 --round --shrink 0.95" + opts + " --out " + dir +
+                "/first")
+                .code,
+            0);
+  const std::string first = dir + "/first/relaxed.kstate";
+  const Result alone = run("relax --resume " + first + opts + " --out " + dir + "/alone");
+  ASSERT_EQ(alone.code, 0) << alone.output;
+  const Result named = run("relax rib2x2 --rows 3 --cols 4 --round --shrink 0.95 --resume " +
+                           first + opts + " --out " + dir + "/named");
+  ASSERT_EQ(named.code, 0) << named.output;
+  const knit::StateFile a = knit::read_state_file(dir + "/alone/relaxed.kstate");
+  const knit::StateFile b = knit::read_state_file(dir + "/named/relaxed.kstate");
+  EXPECT_EQ(a.state.q, b.state.q);
+  ASSERT_TRUE(a.knit.has_value());
+  EXPECT_EQ(a.knit->pattern, "rib2x2");
+  EXPECT_TRUE(a.knit->in_the_round);
+  EXPECT_EQ(a.knit->shrink, 0.95);
+  std::ifstream in(dir + "/alone/summary.json");
+  EXPECT_EQ(nlohmann::json::parse(in)["rows"], 3);
+}
+
+}  // namespace
