@@ -262,3 +262,27 @@ TEST(Cli, ResumeTakesTheKnitFromTheStateFile) {
 }
 
 }  // namespace
+
+namespace {
+
+// the hanging-knit example: a relaxed knit from the repository, hung from its top row;
+// the summary and the log carry the clamp's force
+TEST(Cli, HangingKnitExampleReportsItsClamp) {
+  const std::string out = temp_dir("cli_hanging_knit");
+  const Result r = run(std::string("simulate ") + KNIT_EXAMPLES +
+                       "/hanging_knit.json --duration 0.005 --quiet --out " + out);
+  ASSERT_EQ(r.code, 0) << r.output;
+  std::ifstream in(out + "/summary.json");
+  const auto s = nlohmann::json::parse(in);
+  ASSERT_TRUE(s["constraint_forces"].contains("top")) << s.dump(2);
+  EXPECT_EQ(s["constraint_forces"]["top"]["kind"], "clamp");
+  EXPECT_GT(s["constraint_forces"]["top"]["force"][2].get<double>(), 0.0);
+  EXPECT_EQ(s["knits"].size(), 1u);
+  std::ifstream log(out + "/log.csv");
+  std::string header;
+  std::getline(log, header);
+  EXPECT_NE(header.find("top_fx,top_fy,top_fz"), std::string::npos) << header;
+  EXPECT_NE(header.find("energy_contact"), std::string::npos) << header;
+}
+
+}  // namespace
