@@ -191,3 +191,61 @@ TEST(ConstraintGroups, ModelListsItsGroupsInOrder) {
 
 }  // namespace
 }  // namespace knit
+
+namespace knit {
+namespace {
+
+// A yarn hanging between two clamps that each hold one end point settles into a catenary
+// y = a cosh(x/a): with span S and length L, L = 2a sinh(S / 2a); each clamp carries half
+// the weight, μ g L / 2, vertically, and the horizontal tension μ g a. Bending is made
+// negligible (k_bend = 0.005 g cm³/s²: the bending length √(k_bend / μg) ≈ 0.03 cm against
+// a 12 cm yarn).
+TEST(ConstraintGroups, ClampsOfAHangingYarnCarryTheCatenarysForces) {
+  const double span = 8;
+  Eigen::Matrix3Xd cp(3, 27);  // 24 segments, laid in a sag of about the right depth
+  for (int k = 0; k < 27; ++k) {
+    const double x = span * (k - 1) / 24.0;
+    cp.col(k) = Eigen::Vector3d(x, 0, -0.09 * x * (span - x));
+  }
+  ModelBuilder b;
+  b.add_yarn(cp);
+  Clamp left, right;
+  left.points = {{0, 0.0}};
+  right.points = {{23, 1.0}};
+  b.add_clamp(left);
+  b.add_clamp(right);
+  Params p;
+  p.material.k_bend = 0.005;
+  p.material.k_global = 0.05;
+  p.material.contact = false;
+  p.solver.time_step = 1e-4;
+  Simulator sim(b.build(p));
+  State s = rest_state(b);
+  for (int i = 0; i < 40000; ++i) ASSERT_TRUE(sim.step(s).ok()) << i;  // 4 s
+  const Model& m = sim.model();
+  const double length = m.total_length();
+  const double S =
+      (point_position(m, s.q, right.points[0]) - point_position(m, s.q, left.points[0])).norm();
+  // L = 2a sinh(S/2a) by bisection on a
+  double lo = 0.1, hi = 1000;
+  for (int it = 0; it < 200; ++it) {
+    const double a = 0.5 * (lo + hi);
+    (2 * a * std::sinh(S / (2 * a)) > length ? lo : hi) = a;
+  }
+  const double a = 0.5 * (lo + hi);
+  const double mu_g = p.material.density * 981;
+  Eigen::Vector3d fl = Eigen::Vector3d::Zero(), fr = fl;
+  for (int i = 0; i < 500; ++i) {
+    ASSERT_TRUE(sim.step(s).ok());
+    fl += sim.data().constraint("clamp0")->force / 500;
+    fr += sim.data().constraint("clamp1")->force / 500;
+  }
+  const double weight = mu_g * length;
+  EXPECT_NEAR(fl.z(), weight / 2, 0.02 * weight / 2);
+  EXPECT_NEAR(fr.z(), weight / 2, 0.02 * weight / 2);
+  EXPECT_NEAR(-fl.x(), mu_g * a, 0.02 * mu_g * a) << "a = " << a << " cm";
+  EXPECT_NEAR(fr.x(), mu_g * a, 0.02 * mu_g * a);
+}
+
+}  // namespace
+}  // namespace knit
