@@ -124,8 +124,8 @@ TEST(SceneKnit, BadKnitsAndClampsAreNamed) {
        "knits[0].rotate.axis"},
       {R"({"knits": [{"state": "scene_knit.kstate"}], "clamps": [{"rows": [0, 9]}]})",
        "clamps[0].rows"},
-      {R"({"knits": [{"state": "scene_knit.kstate"}], "clamps": [{"rows": [0, 1], "cols": [0, 1]}]})",
-       "exactly one of"},
+      {R"({"knits": [{"state": "scene_knit.kstate"}], "clamps": [{"rows": [0, 1], "points": []}]})",
+       "or \"points\""},
       {R"({"yarns": [{"line": {"from": [0,0,0], "to": [1,0,0], "segments": 4}}],
            "clamps": [{"cols": [0, 1]}]})",
        "no knit"},
@@ -185,13 +185,34 @@ TEST(SceneKnit, StretchedSampleObeysNewtonsSecondLaw) {
     const StepResult r = sim->step(scene.state);
     ASSERT_TRUE(r.ok()) << i << ": " << r.message;
     const Eigen::Vector3d dp = sim->linear_momentum(scene.state) - p0;
-    const Eigen::Vector3d f = weight + sim->data().constraint("bottom")->force +
-                              sim->data().constraint("top")->force;
+    const Eigen::Vector3d f =
+        weight + sim->data().constraint("bottom")->force + sim->data().constraint("top")->force;
     worst = std::max(worst, (dp / h - f).norm());
     scale = std::max(scale, sim->data().constraint("top")->force.norm());
   }
   ASSERT_GT(scale, weight.norm()) << "the pulled clamp should carry more than the weight";
   EXPECT_LT(worst, 1e-8 * scale) << "largest |Δp/h − ΣF|, against max |F_top| = " << scale;
+}
+
+}  // namespace
+}  // namespace knit
+
+namespace knit {
+namespace {
+
+// "rows" and "cols" together hold the stitches in both ranges: a corner
+TEST(SceneKnit, ClampByRowsAndColumnsHoldsACorner) {
+  const KnitFile f;
+  const Scene scene = parse(R"({"knits": [{"state": "scene_knit.kstate"}],
+                               "clamps": [{"rows": [-2, -1], "cols": [-2, -1]}]})");
+  const Model& m = scene.model;
+  std::set<int> want;
+  for (int i = 0; i < m.num_seg(); ++i)
+    if (m.stitch[i].row >= 2 && m.stitch[i].col >= 3)
+      for (int a = 0; a < 4; ++a) want.insert(m.seg_cp[i] + a);
+  ASSERT_FALSE(want.empty());
+  const auto& got = m.clamps[0].control_points;
+  EXPECT_EQ(std::set<int>(got.begin(), got.end()), want);
 }
 
 }  // namespace

@@ -212,27 +212,10 @@ PlacedKnit parse_knit(const JsonReader& k, const std::string& scene_path) {
   return out;
 }
 
-// what a clamp holds: "rows" or "cols" [first, last] of a knit's stitches (negative
-// counts from the end: -1 is the last) hold the control points of every segment in them;
-// "points" lists yarn points
-void parse_clamp_points(const JsonReader& c, const ModelBuilder& b,
-                        const std::vector<StitchCoord>& stitch, const std::vector<SceneKnit>& knits,
-                        Clamp& clamp) {
-  const int kinds = c.has("rows") + c.has("cols") + c.has("points");
-  if (kinds != 1) c.fail("expected exactly one of \"rows\", \"cols\", \"points\"");
-  if (c.has("points")) {
-    const JsonReader list = c.at("points");
-    list.require_array(1);
-    for (size_t k = 0; k < list.size(); ++k) {
-      const JsonReader p = list.at(k);
-      p.allow_keys({"yarn", "segment", "t", "at"});
-      clamp.points.push_back(parse_point(p, b, true));
-    }
-    return;
-  }
-  const bool rows = c.has("rows");
-  const JsonReader range = c.at(rows ? "rows" : "cols");
-  if (knits.empty()) range.fail("the scene has no knit to clamp by stitch coordinates");
+// an inclusive range [first, last] of stitch rows or columns (negative counts from the
+// end: -1 is the last), checked against the knit's extent
+std::pair<int, int> parse_stitch_range(const JsonReader& range, bool rows,
+                                       const std::vector<StitchCoord>& stitch) {
   range.require_array(2);
   if (range.size() != 2) range.fail("expected [first, last]");
   int lo = range.at(0).integer(-1000000), hi = range.at(1).integer(-1000000);
@@ -243,20 +226,48 @@ void parse_clamp_points(const JsonReader& c, const ModelBuilder& b,
   if (lo < 0 || hi >= extent || lo > hi)
     range.fail("expected " + std::string(rows ? "rows" : "columns") + " within [0, " +
                std::to_string(extent - 1) + "] (negative counts from the end), first ≤ last");
+  return {lo, hi};
+}
+
+// what a clamp holds: "rows" and/or "cols" of a knit's stitches (both: the stitches in
+// both ranges, e.g. a corner) hold the control points of every segment in them;
+// "points" lists yarn points
+void parse_clamp_points(const JsonReader& c, const ModelBuilder& b,
+                        const std::vector<StitchCoord>& stitch, const std::vector<SceneKnit>& knits,
+                        Clamp& clamp) {
+  const bool by_stitch = c.has("rows") || c.has("cols");
+  if (by_stitch == c.has("points"))
+    c.fail("expected \"rows\" and/or \"cols\" of a knit's stitches, or \"points\"");
+  if (c.has("points")) {
+    const JsonReader list = c.at("points");
+    list.require_array(1);
+    for (size_t k = 0; k < list.size(); ++k) {
+      const JsonReader p = list.at(k);
+      p.allow_keys({"yarn", "segment", "t", "at"});
+      clamp.points.push_back(parse_point(p, b, true));
+    }
+    return;
+  }
+  if (knits.empty())
+    c.at(c.has("rows") ? "rows" : "cols")
+        .fail("the scene has no knit to clamp by stitch coordinates");
+  std::pair<int, int> rows{-1000000000, 1000000000}, cols = rows;
+  if (c.has("rows")) rows = parse_stitch_range(c.at("rows"), true, stitch);
+  if (c.has("cols")) cols = parse_stitch_range(c.at("cols"), false, stitch);
   // the control points of the segments in range, each once: segment i of a yarn whose
   // first segment is s0 and first control point c0 uses c0 + (i − s0) … + 3
   std::vector<int> cps;
   int seg0 = 0, cp0 = 0;
   for (int y = 0; y < b.num_yarns(); ++y) {
     const int nseg = (y + 1 < b.num_yarns() ? b.segment_index(y + 1, 0) : b.num_segments()) - seg0;
-    for (int i = seg0; i < seg0 + nseg; ++i) {
-      const int v = rows ? stitch[i].row : stitch[i].col;
-      if (v >= lo && v <= hi)
+    for (int i = seg0; i < seg0 + nseg; ++i)
+      if (stitch[i].row >= rows.first && stitch[i].row <= rows.second &&
+          stitch[i].col >= cols.first && stitch[i].col <= cols.second && stitch[i].row >= 0)
         for (int a = 0; a < 4; ++a) cps.push_back(cp0 + (i - seg0) + a);
-    }
     seg0 += nseg;
     cp0 += nseg + 3;
   }
+  if (cps.empty()) c.fail("no stitch lies in both the rows and the columns given");
   std::sort(cps.begin(), cps.end());
   cps.erase(std::unique(cps.begin(), cps.end()), cps.end());
   clamp.control_points = std::move(cps);
