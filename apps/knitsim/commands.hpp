@@ -9,5 +9,6 @@ void register_relax(CLI::App& app);
 void register_export(CLI::App& app);
 void register_render(CLI::App& app);
 void register_plot(CLI::App& app);
+void register_stretch(CLI::App& app);
 
 }  // namespace knitsim

@@ -14,6 +14,7 @@ int main(int argc, char** argv) {
   knitsim::register_export(app);
   knitsim::register_render(app);
   knitsim::register_plot(app);
+  knitsim::register_stretch(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

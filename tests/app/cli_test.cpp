@@ -286,3 +286,28 @@ TEST(Cli, HangingKnitExampleReportsItsClamp) {
 }
 
 }  // namespace
+
+namespace {
+
+// knitsim stretch: a pattern is relaxed and pulled; two runs' curves go into one plot; a
+// bad direction is refused with nothing written
+TEST(Cli, StretchRunsAndPlotsSeveralRuns) {
+  const std::string dir = temp_dir("cli_stretch");
+  const std::string common = " --rows 5 --cols 6 --relax-time 0.05 --to 0.05 --quiet --no-frames";
+  ASSERT_EQ(run("stretch garter" + common + " --out " + dir + "/course").code, 0);
+  const Result wale =
+      run("stretch garter" + common + " -d wale --clamp-stitches 1 --out " + dir + "/wale");
+  ASSERT_EQ(wale.code, 0) << wale.output;
+  for (const char* f : {"/course/stretch.csv", "/course/relaxed.kstate", "/wale/summary.json"})
+    EXPECT_TRUE(fs::exists(dir + f)) << f;
+  const Result plot =
+      run("stretch " + dir + "/course " + dir + "/wale --plot " + dir + "/curves.png");
+  ASSERT_EQ(plot.code, 0) << plot.output;
+  EXPECT_TRUE(fs::exists(dir + "/curves.png"));
+  const Result bad = run("stretch garter -d diagonal --out " + dir + "/bad");
+  EXPECT_EQ(bad.code, 1);
+  EXPECT_NE(bad.output.find("course, wale or bias"), std::string::npos) << bad.output;
+  EXPECT_FALSE(fs::exists(dir + "/bad"));
+}
+
+}  // namespace

@@ -329,4 +329,30 @@ std::string plot_csv(const std::string& csv, const std::string& out_png) {
   return out;
 }
 
+std::string plot_series(const std::vector<PlotSeries>& series, const std::string& xlabel,
+                        const std::string& ylabel, const std::string& title,
+                        const std::string& out_png) {
+  if (series.empty()) throw std::invalid_argument("plot: no curves to draw");
+  const std::string gnuplot = find_gnuplot();
+  if (gnuplot.empty())
+    throw std::runtime_error("plot: gnuplot is not on PATH (install the gnuplot-nox package)");
+  const fs::path out(out_png);
+  TempDir tmp(out.has_parent_path() ? out.parent_path() : fs::path("."));
+  std::string body = "set xlabel " + quoted(xlabel) + " noenhanced\nset ylabel " + quoted(ylabel) +
+                     " noenhanced\nset key top left box opaque\nplot ";
+  for (size_t k = 0; k < series.size(); ++k) {
+    CsvTable t;
+    t.columns = {"x", "y"};
+    for (size_t i = 0; i < series[k].x.size() && i < series[k].y.size(); ++i)
+      t.rows.push_back({series[k].x[i], series[k].y[i]});
+    const std::string dat = (tmp.path / ("series" + std::to_string(k) + ".dat")).string();
+    write_data(t, dat);
+    if (k > 0) body += ", ";
+    body += quoted(dat) + " u 1:2 w l ls " + std::to_string(k % 6 + 1) + " t " +
+            quoted(series[k].label) + " noenhanced";
+  }
+  render_plot(gnuplot, tmp, out_png, title, body + "\n");
+  return out_png;
+}
+
 }  // namespace knit

@@ -40,4 +40,16 @@ std::vector<std::string> plot_log(const std::string& dir);
 /// `out_png` (default: the CSV path with extension .png). Returns the path written.
 std::string plot_csv(const std::string& csv, const std::string& out_png = "");
 
+/// One labelled curve.
+struct PlotSeries {
+  std::string label;
+  std::vector<double> x, y;
+};
+
+/// Draws several curves (each with its own samples) in one plot with a legend into
+/// `out_png`. Returns the path written. Throws when gnuplot is missing or nothing is given.
+std::string plot_series(const std::vector<PlotSeries>& series, const std::string& xlabel,
+                        const std::string& ylabel, const std::string& title,
+                        const std::string& out_png);
+
 }  // namespace knit

@@ -7,7 +7,10 @@
 
 namespace knit {
 
-void prepare_run_directory(const std::string& dir, bool overwrite) {
+namespace {
+
+// the checks; with `act`, also creates or empties the directory
+void run_directory(const std::string& dir, bool overwrite, bool act) {
   namespace fs = std::filesystem;
   if (dir.empty()) throw std::invalid_argument("--out: no output directory given");
   const fs::path p(dir);
@@ -27,7 +30,7 @@ void prepare_run_directory(const std::string& dir, bool overwrite) {
     throw std::invalid_argument("--out " + dir +
                                 ": refusing to write a run into a repository's root");
   if (!fs::exists(p)) {
-    fs::create_directories(p);
+    if (act) fs::create_directories(p);
     return;
   }
   if (!fs::is_directory(p))
@@ -43,7 +46,18 @@ void prepare_run_directory(const std::string& dir, bool overwrite) {
     throw std::invalid_argument("--out " + dir + ": the directory already holds files (" + names +
                                 "); give --overwrite to replace them, or choose another directory");
   }
-  for (const fs::path& e : entries) fs::remove_all(e);
+  if (act)
+    for (const fs::path& e : entries) fs::remove_all(e);
+}
+
+}  // namespace
+
+void prepare_run_directory(const std::string& dir, bool overwrite) {
+  run_directory(dir, overwrite, true);
+}
+
+void check_run_directory(const std::string& dir, bool overwrite) {
+  run_directory(dir, overwrite, false);
 }
 
 }  // namespace knit

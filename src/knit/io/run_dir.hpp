@@ -11,4 +11,8 @@ namespace knit {
 /// (a directory holding .git), and a path that is not a directory.
 void prepare_run_directory(const std::string& dir, bool overwrite);
 
+/// The checks of prepare_run_directory without touching anything: throws when `dir` could
+/// not be prepared (a long job checks this before it starts).
+void check_run_directory(const std::string& dir, bool overwrite);
+
 }  // namespace knit

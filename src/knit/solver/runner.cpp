@@ -145,6 +145,7 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
     ++frame;
     last_output = Clock::now();
     last_output_step = report.steps;
+    if (opt.on_output) opt.on_output(data, state);
   };
 
   // start on the constraints (glued ends laid apart, pins given off the yarn, …)

@@ -27,6 +27,9 @@ struct RunOptions {
   bool write_frames = true;
   /// Optional early stop, checked at every output step: return true to end the run (ok).
   std::function<bool(const StepData&, const State&)> stop_when;
+  /// Optional observer, called with every written state (the initial one included),
+  /// before stop_when: measurements taken along the run (stretch curves, …).
+  std::function<void(const StepData&, const State&)> on_output;
   nlohmann::json extra = nlohmann::json::object();  ///< merged into summary.json
   /// Optional: called with the final state and the summary before it is written, to add
   /// fields (shape measures, …).

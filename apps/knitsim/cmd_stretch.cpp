@@ -1,0 +1,124 @@
+// knitsim stretch PATTERN --direction course|wale|bias --to STRAIN --out DIR
+// knitsim stretch --from relaxed.kstate --direction … --out DIR
+// knitsim stretch DIR1 DIR2 … --plot curves.png
+// A thin adapter over the stretch recipe (src/knit/recipes/stretch.hpp); a PATTERN is
+// first relaxed with the relax recipe's defaults.
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+
+#include "commands.hpp"
+#include "common.hpp"
+#include "knit/io/run_dir.hpp"
+#include "knit/io/state_file.hpp"
+#include "knit/recipes/relax_knit.hpp"
+#include "knit/recipes/stretch.hpp"
+
+namespace knitsim {
+
+void register_stretch(CLI::App& app) {
+  struct Opts {
+    std::vector<std::string> inputs;
+    std::string from, out, plot, direction = "course";
+    knit::StretchOptions stretch;
+    knit::RelaxKnitOptions relax;
+    double relax_time = 1.0;
+    int contact_points = knit::stretch_params().discretisation.contact_points;
+    int threads = 0;
+    bool quiet = false, no_frames = false, overwrite = false;
+  };
+  auto o = std::make_shared<Opts>();
+  CLI::App* cmd = app.add_subcommand(
+      "stretch", "pull a relaxed knit between two clamps and record its force–strain curve");
+  cmd->add_option("inputs", o->inputs,
+                  "a PATTERN to knit, relax and stretch (built-in or chart file); or, with "
+                  "--plot, stretch runs' directories to draw together");
+  cmd->add_option("--from", o->from, "stretch this relaxed knit (.kstate from `knitsim relax`)")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--out,-o", o->out, "output directory");
+  cmd->add_flag("--overwrite", o->overwrite,
+                "replace the files of an earlier run in the output directory");
+  cmd->add_option("--plot", o->plot, "draw the force–strain curves of the given run directories");
+  cmd->add_option("--direction,-d", o->direction, "course, wale or bias");
+  cmd->add_option("--to", o->stretch.to_strain, "nominal strain to pull to (1 = doubled length)");
+  cmd->add_option("--cycles", o->stretch.cycles, "further half-cycles: back, out, …");
+  cmd->add_option("--speed", o->stretch.speed, "speed of the moving clamp (cm/s)");
+  cmd->add_option("--clamp-stitches", o->stretch.clamp_stitches,
+                  "columns, rows or corner stitches held by each clamp");
+  cmd->add_option("--contact-points", o->contact_points, "contact quadrature points per segment")
+      ->check(CLI::Range(1, 64));
+  cmd->add_option("--alpha-small", o->stretch.params.material.alpha_small,
+                  "non-rigid damping of the small regions per step (default 0.675)")
+      ->check(CLI::Range(0.0, 1.0));
+  cmd->add_option("--alpha-large", o->stretch.params.material.alpha_large,
+                  "non-rigid damping of the large regions per step (default 0.3)")
+      ->check(CLI::Range(0.0, 1.0));
+  cmd->add_option("--rows", o->relax.knit.rows, "rows of the PATTERN's sample")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--cols", o->relax.knit.cols, "stitches per row of the PATTERN's sample")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--relax-time", o->relax_time, "seconds of relaxation before the pull")
+      ->check(CLI::PositiveNumber);
+  add_threads_option(cmd, o->threads);
+  cmd->add_flag("--no-frames", o->no_frames, "write no states along the way");
+  cmd->add_flag("--quiet,-q", o->quiet, "no progress line");
+  cmd->callback([o]() {
+    if (!o->plot.empty()) {
+      if (o->inputs.empty())
+        throw std::invalid_argument("stretch --plot: give the stretch runs' directories");
+      std::cout << "wrote " << knit::plot_stretch_runs(o->inputs, o->plot) << "\n";
+      return;
+    }
+    if (o->out.empty()) throw std::invalid_argument("stretch: --out is required");
+    if (o->from.empty() == (o->inputs.size() != 1))
+      throw std::invalid_argument("stretch: give either one PATTERN or --from STATE");
+    o->stretch.direction = knit::parse_stretch_direction(o->direction);
+    o->stretch.params.discretisation.contact_points = o->contact_points;
+    o->stretch.out_dir = o->out;
+    o->stretch.overwrite = o->overwrite;
+    o->stretch.progress = !o->quiet;
+    o->stretch.write_frames = !o->no_frames;
+    knit::check_run_directory(o->out, o->overwrite);  // before a relaxation of minutes
+    auto control = make_thread_control(o->threads);
+    std::string from = o->from;
+    std::string temp;
+    if (from.empty()) {
+      // knit and relax the pattern in memory; its relaxed state goes beside the stretch run
+      o->relax.run.max_time = o->relax_time;
+      o->relax.run.progress = !o->quiet;
+      if (!o->quiet) std::cerr << "relaxing " << o->inputs[0] << " first\n";
+      const knit::RelaxResult r = knit::relax_knit(o->inputs[0], o->relax);
+      char name[] = "/tmp/knitsim-stretch-XXXXXX";
+      const int fd = mkstemp(name);
+      if (fd < 0) throw std::runtime_error("stretch: cannot create a temporary file");
+      close(fd);
+      temp = name;
+      knit::write_state_file(temp, knit::make_state_file(r.model, r.state));
+      from = temp;
+    }
+    knit::StretchResult result;
+    try {
+      result = knit::stretch_knit(from, o->stretch);
+    } catch (...) {
+      if (!temp.empty()) std::remove(temp.c_str());
+      throw;
+    }
+    if (!temp.empty()) {
+      std::filesystem::copy_file(temp, std::filesystem::path(o->out) / "relaxed.kstate",
+                                 std::filesystem::copy_options::overwrite_existing);
+      std::remove(temp.c_str());
+    }
+    print_report(result.report, o->out);
+    const auto& m = result.report.summary["stretch"];
+    std::cout << "stretched " << o->direction << " to strain " << o->stretch.to_strain
+              << ": initial clamp separation " << result.initial_separation << " cm, max force "
+              << m["max_force_dyn"] << " dyn, stiffness " << m["stiffness_small_strain"] << " → "
+              << m["stiffness_end"] << " dyn per unit strain; stretch.csv in " << o->out << "/\n";
+    if (result.report.status != knit::StepStatus::OK) throw RunFailed();
+  });
+}
+
+}  // namespace knitsim

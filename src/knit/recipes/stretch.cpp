@@ -1,0 +1,325 @@
+#include "knit/recipes/stretch.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <limits>
+#include <stdexcept>
+
+#include "knit/io/plot.hpp"
+#include "knit/io/run_dir.hpp"
+#include "knit/io/state_file.hpp"
+#include "knit/recipes/simulate_scene.hpp"
+#include "knit/scene/scene.hpp"
+
+namespace knit {
+
+namespace fs = std::filesystem;
+
+StretchDirection parse_stretch_direction(const std::string& name) {
+  if (name == "course") return StretchDirection::COURSE;
+  if (name == "wale") return StretchDirection::WALE;
+  if (name == "bias") return StretchDirection::BIAS;
+  throw std::invalid_argument("--direction: expected course, wale or bias, got \"" + name + "\"");
+}
+
+const char* stretch_direction_name(StretchDirection d) {
+  switch (d) {
+    case StretchDirection::COURSE:
+      return "course";
+    case StretchDirection::WALE:
+      return "wale";
+    case StretchDirection::BIAS:
+      return "bias";
+  }
+  return "course";
+}
+
+Params stretch_params() {
+  Params p = Params::simulation();
+  p.gravity.setZero();
+  return p;
+}
+
+namespace {
+
+// the two clamps as scene JSON: "fixed" at the start of the rows/columns, "moving" at
+// their end, with the moving one's keyframes
+nlohmann::json clamps_json(StretchDirection d, int k, const nlohmann::json& keyframes) {
+  const nlohmann::json first = {0, k - 1}, last = {-k, -1};
+  nlohmann::json fixed = {{"name", "fixed"}}, moving = {{"name", "moving"}};
+  if (d == StretchDirection::COURSE) {
+    fixed["cols"] = first;
+    moving["cols"] = last;
+  } else if (d == StretchDirection::WALE) {
+    fixed["rows"] = first;
+    moving["rows"] = last;
+  } else {
+    fixed["rows"] = first;
+    fixed["cols"] = first;
+    moving["rows"] = last;
+    moving["cols"] = last;
+  }
+  if (!keyframes.empty()) moving["keyframes"] = keyframes;
+  return nlohmann::json::array({fixed, moving});
+}
+
+Scene stretch_scene(const std::string& path, const StretchOptions& o,
+                    const nlohmann::json& keyframes) {
+  const nlohmann::json doc = {{"knits", nlohmann::json::array({{{"state", path}}})},
+                              {"clamps", clamps_json(o.direction, o.clamp_stitches, keyframes)}};
+  return parse_scene(doc, path, o.params);
+}
+
+// least-squares slope of y against x over the samples with x in [lo, hi]; NaN if < 3
+double slope(const std::vector<StretchSample>& c, size_t n, double lo, double hi) {
+  double sx = 0, sy = 0, sxx = 0, sxy = 0;
+  int m = 0;
+  for (size_t i = 0; i < n; ++i) {
+    const double x = c[i].strain, y = c[i].force_moving;
+    if (x < lo || x > hi) continue;
+    sx += x;
+    sy += y;
+    sxx += x * x;
+    sxy += x * y;
+    ++m;
+  }
+  if (m < 3) return std::numeric_limits<double>::quiet_NaN();
+  const double den = m * sxx - sx * sx;
+  return den > 0 ? (m * sxy - sx * sy) / den : std::numeric_limits<double>::quiet_NaN();
+}
+
+nlohmann::json number_or_null(double x) {
+  return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(nullptr);
+}
+
+}  // namespace
+
+nlohmann::json stretch_measures(const std::vector<StretchSample>& curve, double to,
+                                double initial_separation) {
+  nlohmann::json m;
+  m["initial_separation_cm"] = initial_separation;
+  // the first pull: samples up to the first one at the target strain
+  size_t n = curve.size();
+  for (size_t i = 0; i < curve.size(); ++i)
+    if (curve[i].strain >= to * (1 - 1e-9)) {
+      n = i + 1;
+      break;
+    }
+  const double window = 0.1 * to;
+  const double k0 = slope(curve, n, 0, window);
+  m["stiffness_small_strain"] = number_or_null(k0);
+  m["stiffness_end"] = number_or_null(slope(curve, n, to - window, to));
+  double stiffening = std::numeric_limits<double>::quiet_NaN();
+  if (std::isfinite(k0) && k0 > 0)
+    for (double e = window; e + window <= to * (1 + 1e-9); e += 0.5 * window)
+      if (slope(curve, n, e, e + window) >= 3 * k0) {
+        stiffening = e;
+        break;
+      }
+  m["stiffening_strain"] = number_or_null(stiffening);
+  double work = 0, max_force = 0;
+  for (size_t i = 1; i < curve.size(); ++i) {
+    const double dx = (curve[i].strain - curve[i - 1].strain) * initial_separation;
+    work += 0.5 * (curve[i].force_moving + curve[i - 1].force_moving) * dx;
+  }
+  for (const StretchSample& s : curve) max_force = std::max(max_force, s.force_moving);
+  m["work_erg"] = work;
+  m["max_force_dyn"] = max_force;
+  if (!curve.empty() && curve.front().width > 0)
+    m["width_change"] = curve[n - 1].width / curve.front().width - 1;
+  return m;
+}
+
+void write_stretch_csv(const std::vector<StretchSample>& curve, const std::string& path) {
+  std::ostringstream o;
+  o << "time_s,strain,force_fixed_dyn,force_moving_dyn,width_cm,potential_energy_erg,"
+       "kinetic_energy_erg,min_contact_distance\n"
+    << std::setprecision(10);
+  for (const StretchSample& s : curve)
+    o << s.time << "," << s.strain << "," << s.force_fixed << "," << s.force_moving << ","
+      << s.width << "," << s.potential_energy << "," << s.kinetic_energy << ","
+      << s.min_contact_distance << "\n";
+  write_file_atomic(path, o.str());
+}
+
+StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions& o) {
+  // everything is validated before anything is written
+  if (!(o.to_strain > 0) || !std::isfinite(o.to_strain) || o.to_strain > 10)
+    throw std::invalid_argument("--to: expected a strain in (0, 10], got " +
+                                std::to_string(o.to_strain));
+  if (!(o.speed > 0) || !std::isfinite(o.speed) || o.speed > 1000)
+    throw std::invalid_argument("--speed: expected (0, 1000] cm/s, got " + std::to_string(o.speed));
+  if (o.cycles < 0 || o.cycles > 100)
+    throw std::invalid_argument("--cycles: expected 0 to 100, got " + std::to_string(o.cycles));
+  if (o.clamp_stitches < 1) throw std::invalid_argument("--clamp-stitches: expected at least 1");
+  if (!(o.output_strain > 0) || !(o.output_strain <= o.to_strain))
+    throw std::invalid_argument("output strain: expected (0, --to]");
+  const StateFile file = read_state_file(kstate_path);
+  if (file.stitch.empty())
+    throw std::invalid_argument(kstate_path +
+                                ": no stitch coordinates: stretch a knit written "
+                                "by `knitsim relax`");
+  int rows = 0, cols = 0;
+  for (const StitchCoord& s : file.stitch) {
+    rows = std::max(rows, s.row + 1);
+    cols = std::max(cols, s.col + 1);
+  }
+  const int across = o.direction == StretchDirection::WALE     ? rows
+                     : o.direction == StretchDirection::COURSE ? cols
+                                                               : std::min(rows, cols);
+  if (across < 2 * o.clamp_stitches + 1)
+    throw std::invalid_argument(kstate_path + ": the sample has " + std::to_string(across) + " " +
+                                (o.direction == StretchDirection::WALE ? "rows" : "columns") +
+                                " along the pull; two clamps of " +
+                                std::to_string(o.clamp_stitches) + " need at least " +
+                                std::to_string(2 * o.clamp_stitches + 1));
+
+  // the clamps' centres give the pull axis and the initial separation
+  const Scene probe = stretch_scene(kstate_path, o, nlohmann::json::array());
+  const Eigen::Vector3d c0 = probe.model.clamps[0].centre, c1 = probe.model.clamps[1].centre;
+  StretchResult result;
+  result.initial_separation = (c1 - c0).norm();
+  if (!(result.initial_separation > 0))
+    throw std::invalid_argument(kstate_path + ": the two clamps coincide");
+  const Eigen::Vector3d axis = (c1 - c0) / result.initial_separation;
+  result.axis = axis;
+  // across the pull, in the fabric: the sample's normal is its direction of least spread
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  const int ncp = probe.model.num_cp();
+  for (int k = 0; k < ncp; ++k) mean += probe.state.q.segment<3>(3 * k);
+  mean /= ncp;
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (int k = 0; k < ncp; ++k) {
+    const Eigen::Vector3d d = probe.state.q.segment<3>(3 * k) - mean;
+    cov += d * d.transpose();
+  }
+  const Eigen::Vector3d normal =
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(cov).eigenvectors().col(0);
+  const Eigen::Vector3d across_axis = normal.cross(axis).normalized();
+
+  // the moving clamp: out to the target strain, then back and forth, each pull a whole
+  // number of steps (a partial last step would move the clamp slower and show as a dip)
+  const double stroke = o.to_strain * result.initial_separation;
+  const double h0 = o.params.solver.time_step;
+  const long long pull_steps = std::max(1LL, std::llround(stroke / (o.speed * h0)));
+  const double pull_time = static_cast<double>(pull_steps) * h0;
+  result.speed = stroke / pull_time;
+  nlohmann::json keyframes = nlohmann::json::array({{{"time", 0.0}}});
+  for (int k = 1; k <= 1 + o.cycles; ++k) {
+    const Eigen::Vector3d t = (k % 2 == 1 ? stroke : 0.0) * axis;
+    keyframes.push_back({{"time", k * pull_time}, {"translate", {t[0], t[1], t[2]}}});
+  }
+  Scene scene = stretch_scene(kstate_path, o, keyframes);
+  const double h = scene.model.params.solver.time_step;
+  scene.duration = static_cast<double>((1 + o.cycles) * pull_steps) * h;
+  scene.output_every = std::max(
+      1,
+      static_cast<int>(std::lround(o.output_strain * result.initial_separation / (o.speed * h))));
+  if (!o.out_dir.empty()) prepare_run_directory(o.out_dir, o.overwrite);
+
+  const Clamp& moving = scene.model.clamps[1];
+  const double band = 0.5 * scene.model.params.material.radius * 8;  // ± half a cm
+  auto sample = [&](const StepData& data, const State& state) {
+    StretchSample s;
+    s.time = state.time;
+    const double moved = moving.pose(state.time).translation.dot(axis);
+    s.strain = moved / result.initial_separation;
+    if (const ConstraintRecord* f = data.constraint("fixed")) s.force_fixed = -f->force.dot(axis);
+    if (const ConstraintRecord* f = data.constraint("moving")) s.force_moving = f->force.dot(axis);
+    // the width across the pull of the band of control points around the middle
+    const double mid = 0.5 * (c0.dot(axis) + c1.dot(axis) + moved);
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (int k = 0; k < ncp; ++k) {
+      const Eigen::Vector3d p = state.q.segment<3>(3 * k);
+      if (std::abs(p.dot(axis) - mid) > band) continue;
+      lo = std::min(lo, p.dot(across_axis));
+      hi = std::max(hi, p.dot(across_axis));
+    }
+    s.width = hi >= lo ? hi - lo + 2 * scene.model.params.material.radius : 0.0;
+    s.potential_energy = data.potential_energy;
+    s.kinetic_energy = data.kinetic_energy;
+    s.min_contact_distance = data.contact.present && std::isfinite(data.contact.min_distance_ratio)
+                                 ? data.contact.min_distance_ratio
+                                 : -1;
+    result.curve.push_back(s);
+  };
+
+  auto sim = make_scene_simulator(scene);
+  RunOptions run;
+  run.duration = scene.duration;
+  run.output_every = scene.output_every;
+  run.out_dir = o.out_dir;
+  run.progress = o.progress;
+  run.write_frames = o.write_frames;
+  run.on_output = sample;
+  run.extra = {{"direction", stretch_direction_name(o.direction)},
+               {"to_strain", o.to_strain},
+               {"cycles", o.cycles},
+               {"speed_cm_s", result.speed},
+               {"clamp_stitches", o.clamp_stitches},
+               {"from", kstate_path},
+               {"axis", {axis[0], axis[1], axis[2]}}};
+  if (file.knit) {
+    run.extra["pattern"] = file.knit->pattern;
+    run.extra["rows"] = file.knit->rows;
+    run.extra["cols"] = file.knit->cols;
+  }
+  run.on_finish = [&](Simulator&, const State&, nlohmann::json& summary) {
+    summary["stretch"] = stretch_measures(result.curve, o.to_strain, result.initial_separation);
+  };
+  result.report = run_simulation(*sim, scene.state, run);
+
+  if (!o.out_dir.empty()) {
+    const fs::path dir(o.out_dir);
+    write_stretch_csv(result.curve, (dir / "stretch.csv").string());
+    if (!find_gnuplot().empty()) {
+      PlotSeries fixed{"fixed clamp", {}, {}}, pulled{"moving clamp", {}, {}},
+          width{"width", {}, {}};
+      for (const StretchSample& s : result.curve) {
+        fixed.x.push_back(s.strain);
+        fixed.y.push_back(s.force_fixed);
+        pulled.x.push_back(s.strain);
+        pulled.y.push_back(s.force_moving);
+        width.x.push_back(s.strain);
+        width.y.push_back(s.width);
+      }
+      const std::string label = std::string(file.knit ? file.knit->pattern + ", " : "") +
+                                stretch_direction_name(o.direction);
+      plot_series({pulled, fixed}, "nominal strain", "force along the pull (dyn)",
+                  "Stretch: " + label, (dir / "stretch_force.png").string());
+      plot_series({width}, "nominal strain", "width across the pull at the middle (cm)",
+                  "Width: " + label, (dir / "stretch_width.png").string());
+    }
+  }
+  return result;
+}
+
+std::string plot_stretch_runs(const std::vector<std::string>& dirs, const std::string& out_png) {
+  std::vector<PlotSeries> series;
+  for (const std::string& d : dirs) {
+    const std::string csv = (fs::path(d) / "stretch.csv").string();
+    const CsvTable t = read_csv(csv);
+    const int x = t.column("strain", csv), y = t.column("force_moving_dyn", csv);
+    std::string label = fs::path(d).filename().string();
+    std::ifstream in(fs::path(d) / "summary.json");
+    const nlohmann::json s = nlohmann::json::parse(in, nullptr, false);
+    if (s.is_object() && s.contains("direction") && s["direction"].is_string())
+      label =
+          (s.contains("pattern") && s["pattern"].is_string() ? s["pattern"].get<std::string>() + " "
+                                                             : std::string()) +
+          s["direction"].get<std::string>();
+    PlotSeries p{label, {}, {}};
+    for (const auto& row : t.rows) {
+      p.x.push_back(row[x]);
+      p.y.push_back(row[y]);
+    }
+    series.push_back(std::move(p));
+  }
+  return plot_series(series, "nominal strain", "force along the pull (dyn)", "Stretch tests",
+                     out_png);
+}
+
+}  // namespace knit

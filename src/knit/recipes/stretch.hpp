@@ -1,0 +1,89 @@
+#pragma once
+// Recipe: "stretch a sample" — a tensile test of a relaxed knit. Its first and last
+// `clamp_stitches` columns (course), rows (wale) or opposite corners (bias, the stitches
+// within clamp_stitches rows and columns of the corner) are held by clamps; the first
+// clamp holds still, the second moves away along the line between the clamps' centres at
+// a constant speed until the nominal strain (separation / initial separation − 1) reaches
+// `to_strain`, then back and forth for `cycles` more half-cycles. The simulation
+// parameters of MODEL.md §8 apply, without gravity (a sample on a tensile tester).
+//
+// Recorded at every written state (StretchSample): nominal strain, the force each clamp
+// exerts along the pull axis (from the clamps' constraint records, positive in tension),
+// the sample's width across the pull at its middle, energies and closest approach.
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "knit/model/params.hpp"
+#include "knit/solver/runner.hpp"
+
+namespace knit {
+
+enum class StretchDirection { COURSE, WALE, BIAS };
+
+/// "course", "wale" or "bias"; throws std::invalid_argument naming the value otherwise.
+StretchDirection parse_stretch_direction(const std::string& name);
+const char* stretch_direction_name(StretchDirection direction);
+
+/// MODEL.md §8's simulation column without gravity, 10 contact points per segment.
+Params stretch_params();
+
+struct StretchOptions {
+  StretchDirection direction = StretchDirection::COURSE;
+  double to_strain = 1.0;       ///< nominal strain at the end of the pull (1: doubled length)
+  int cycles = 0;               ///< further half-cycles after the pull (back, out, …)
+  double speed = 5.0;           ///< the moving clamp's speed (cm/s)
+  int clamp_stitches = 2;       ///< columns, rows or corner size held by each clamp
+  double output_strain = 0.01;  ///< a sample (and a written state) every this much strain
+  Params params = stretch_params();
+  std::string out_dir;  ///< empty: write nothing
+  bool overwrite = false;
+  bool progress = true;
+  bool write_frames = true;
+};
+
+/// One sample of the curve.
+struct StretchSample {
+  double time = 0;                  ///< s
+  double strain = 0;                ///< nominal strain
+  double force_fixed = 0;           ///< force of the fixed clamp along −axis (dyn; tension > 0)
+  double force_moving = 0;          ///< force of the moving clamp along +axis (dyn)
+  double width = 0;                 ///< extent across the pull in the middle band (cm)
+  double potential_energy = 0;      ///< erg
+  double kinetic_energy = 0;        ///< erg
+  double min_contact_distance = 0;  ///< d = distance / 2r over contact pairs (−1: none)
+};
+
+struct StretchResult {
+  RunReport report;  ///< the run; its summary holds the stretch measures below
+  std::vector<StretchSample> curve;
+  double initial_separation = 0;  ///< distance between the clamps' centres at t = 0 (cm)
+  double speed = 0;  ///< the moving clamp's speed as run: each pull a whole number of steps
+  Eigen::Vector3d axis = Eigen::Vector3d::UnitX();  ///< pull direction (unit)
+};
+
+/// Stretches the relaxed knit in `kstate_path` (written by `knitsim relax`). With out_dir,
+/// writes the run (frames, log.csv, final.kstate) and stretch.csv, a summary.json with
+/// the stretch measures (see stretch_measures) and stretch_force.png / stretch_width.png.
+/// Throws std::invalid_argument naming the option on bad input, before anything is written.
+StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions& options);
+
+/// Measures of a curve, for the summary: initial_separation_cm, stiffness_small_strain
+/// (least-squares slope of the moving clamp's force against strain over the first tenth
+/// of the pull, dyn per unit strain), stiffness_end (over its last tenth), stiffening_strain
+/// (the first strain where the slope over a window of a tenth of the pull reaches three
+/// times the small-strain slope; null if never), work_erg (∫ F dx of the moving clamp over
+/// the whole run), max_force_dyn, width_change (width at the end of the pull over the
+/// initial width, − 1).
+nlohmann::json stretch_measures(const std::vector<StretchSample>& curve, double to_strain,
+                                double initial_separation);
+
+/// Writes the samples as CSV: time_s, strain, force_fixed_dyn, force_moving_dyn, width_cm,
+/// potential_energy_erg, kinetic_energy_erg, min_contact_distance.
+void write_stretch_csv(const std::vector<StretchSample>& curve, const std::string& path);
+
+/// Draws the force–strain curves (moving clamp) of several stretch runs' directories in
+/// one plot, each labelled "PATTERN DIRECTION" from its summary. Returns the path written.
+std::string plot_stretch_runs(const std::vector<std::string>& dirs, const std::string& out_png);
+
+}  // namespace knit

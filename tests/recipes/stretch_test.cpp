@@ -1,0 +1,122 @@
+// The stretch recipe on a small relaxed sample: the force rises with strain, the two clamps
+// pull equally and oppositely, the outputs exist and parse, and bad options are refused
+// before anything is written.
+#include "knit/recipes/stretch.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "knit/io/plot.hpp"
+#include "knit/io/state_file.hpp"
+#include "knit/recipes/relax_knit.hpp"
+
+namespace knit {
+namespace {
+
+namespace fs = std::filesystem;
+
+// a 5×6 stockinette relaxed for 0.1 s, written as `knitsim relax` writes it
+std::string relaxed_sample() {
+  static const std::string path = [] {
+    RelaxKnitOptions o;
+    o.knit.rows = 5;
+    o.knit.cols = 6;
+    o.run.max_time = 0.1;
+    o.run.progress = false;
+    const RelaxResult r = relax_knit("stockinette", o);
+    const std::string p = (fs::path(::testing::TempDir()) / "stretch_sample.kstate").string();
+    write_state_file(p, make_state_file(r.model, r.state));
+    return p;
+  }();
+  return path;
+}
+
+TEST(Stretch, ForceRisesAndTheClampsBalance) {
+  StretchOptions o;
+  o.to_strain = 0.2;
+  o.speed = 5;
+  o.progress = false;
+  o.out_dir = (fs::path(::testing::TempDir()) / "stretch_course").string();
+  o.overwrite = true;
+  const StretchResult r = stretch_knit(relaxed_sample(), o);
+  ASSERT_EQ(r.report.summary["status"], "ok") << r.report.summary.dump(2);
+  ASSERT_GE(r.curve.size(), 15u);
+  EXPECT_NEAR(r.curve.back().strain, 0.2, 1e-9);
+  // the course axis is the knit's x
+  EXPECT_GT(std::abs(r.axis.x()), 0.95) << r.axis.transpose();
+  // tension builds up as the sample is pulled
+  const StretchSample& mid = r.curve[r.curve.size() / 2];
+  EXPECT_GT(mid.force_moving, 0.0);
+  EXPECT_GT(r.curve.back().force_moving, r.curve[2].force_moving);
+  // away from the start, the fixed clamp holds what the moving one pulls (the clamped
+  // sample's momentum hardly changes): within 2 %
+  for (const StretchSample& s : r.curve)
+    if (s.strain >= 0.05 && s.strain < 0.2 - 1e-9)
+      EXPECT_NEAR(s.force_fixed, s.force_moving, 0.02 * s.force_moving) << "strain " << s.strain;
+  // the sample narrows across the pull
+  EXPECT_LT(r.curve.back().width, r.curve.front().width);
+  // the outputs: stretch.csv with the curve, the summary's measures
+  const CsvTable t = read_csv(o.out_dir + "/stretch.csv");
+  EXPECT_EQ(t.rows.size(), r.curve.size());
+  EXPECT_NO_THROW(t.column("force_moving_dyn", "stretch.csv"));
+  std::ifstream in(o.out_dir + "/summary.json");
+  const auto s = nlohmann::json::parse(in);
+  for (const char* key : {"initial_separation_cm", "stiffness_small_strain", "stiffness_end",
+                          "stiffening_strain", "work_erg", "max_force_dyn", "width_change"})
+    EXPECT_TRUE(s["stretch"].contains(key)) << key;
+  EXPECT_EQ(s["direction"], "course");
+  EXPECT_EQ(s["pattern"], "stockinette");
+  EXPECT_GT(s["stretch"]["work_erg"].get<double>(), 0.0);
+  if (!find_gnuplot().empty())
+    for (const char* png : {"stretch_force.png", "stretch_width.png"})
+      EXPECT_TRUE(fs::exists(o.out_dir + "/" + png)) << png;
+}
+
+TEST(Stretch, WaleAndBiasPullAlongTheirAxes) {
+  for (const char* d : {"wale", "bias"}) {
+    StretchOptions o;
+    o.direction = parse_stretch_direction(d);
+    o.clamp_stitches = 1;
+    o.to_strain = 0.05;
+    o.progress = false;
+    const StretchResult r = stretch_knit(relaxed_sample(), o);  // no out_dir: in memory
+    ASSERT_EQ(r.report.summary["status"], "ok") << d;
+    if (std::string(d) == "wale")
+      EXPECT_GT(std::abs(r.axis.y()), 0.95) << r.axis.transpose();
+    else
+      EXPECT_GT(std::min(std::abs(r.axis.x()), std::abs(r.axis.y())), 0.4) << r.axis.transpose();
+    EXPECT_GT(r.curve.back().force_moving, 0.0) << d;
+  }
+}
+
+TEST(Stretch, BadOptionsAreRefusedBeforeAnythingIsWritten) {
+  const std::string out = (fs::path(::testing::TempDir()) / "stretch_bad").string();
+  fs::remove_all(out);
+  EXPECT_THROW(parse_stretch_direction("diagonal"), std::invalid_argument);
+  auto message = [&](StretchOptions o) {
+    o.out_dir = out;
+    o.progress = false;
+    try {
+      stretch_knit(relaxed_sample(), o);
+    } catch (const std::exception& e) {
+      return std::string(e.what());
+    }
+    return std::string("(accepted)");
+  };
+  StretchOptions zero;
+  zero.to_strain = 0;
+  EXPECT_NE(message(zero).find("--to"), std::string::npos);
+  StretchOptions slow;
+  slow.speed = -1;
+  EXPECT_NE(message(slow).find("--speed"), std::string::npos);
+  StretchOptions wide;
+  wide.direction = StretchDirection::WALE;
+  wide.clamp_stitches = 3;  // 5 rows cannot hold two clamps of 3
+  EXPECT_NE(message(wide).find("need at least 7"), std::string::npos) << message(wide);
+  EXPECT_FALSE(fs::exists(out)) << "a refused stretch wrote its directory";
+}
+
+}  // namespace
+}  // namespace knit
