@@ -14,9 +14,7 @@ std::unique_ptr<Simulator> make_scene_simulator(const Scene& scene) {
   return sim;
 }
 
-RunReport simulate_scene(Scene& scene, const SimulateOptions& o) {
-  auto sim = make_scene_simulator(scene);
-  if (!o.out_dir.empty()) prepare_run_directory(o.out_dir, o.overwrite);
+RunOptions scene_run_options(const Scene& scene, const SimulateOptions& o) {
   RunOptions run;
   run.duration = scene.duration;
   run.output_every = scene.output_every;
@@ -24,6 +22,13 @@ RunReport simulate_scene(Scene& scene, const SimulateOptions& o) {
   run.progress = o.progress;
   run.write_frames = o.write_frames;
   run.extra = o.extra;
+  return run;
+}
+
+RunReport simulate_scene(Scene& scene, const SimulateOptions& o) {
+  auto sim = make_scene_simulator(scene);
+  if (!o.out_dir.empty()) prepare_run_directory(o.out_dir, o.overwrite);
+  RunOptions run = scene_run_options(scene, o);
   if (!scene.knits.empty()) {
     nlohmann::json knits = nlohmann::json::array();
     for (const SceneKnit& k : scene.knits)

@@ -23,6 +23,10 @@ struct SimulateOptions {
   nlohmann::json extra = nlohmann::json::object();  ///< merged into the summary
 };
 
+/// The run options for a scene: its duration and output interval, and the options' output
+/// directory, progress line, frames and summary fields.
+RunOptions scene_run_options(const Scene& scene, const SimulateOptions& options);
+
 /// Runs `scene` from scene.state (which ends as the last state) for scene.duration.
 RunReport simulate_scene(Scene& scene, const SimulateOptions& options);
 

@@ -248,12 +248,11 @@ StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions&
   };
 
   auto sim = make_scene_simulator(scene);
-  RunOptions run;
-  run.duration = scene.duration;
-  run.output_every = scene.output_every;
-  run.out_dir = o.out_dir;
-  run.progress = o.progress;
-  run.write_frames = o.write_frames;
+  SimulateOptions so;
+  so.out_dir = o.out_dir;
+  so.progress = o.progress;
+  so.write_frames = o.write_frames;
+  RunOptions run = scene_run_options(scene, so);
   run.on_output = sample;
   run.extra = {{"direction", stretch_direction_name(o.direction)},
                {"to_strain", o.to_strain},
