@@ -73,7 +73,8 @@ TEST(ReferenceStates, FlatStockinetteRelaxation) {
   const std::string out = fresh_dir("relax_flat");
   std::string output;
   ASSERT_EQ(run_app("relax stockinette --rows 6 --cols 6 --max-time 0.05 --check-every 100 "
-                    "--quiet --threads 2 --out " + out,
+                    "--quiet --threads 2 --out " +
+                        out,
                     output),
             0)
       << output;
@@ -84,7 +85,8 @@ TEST(ReferenceStates, RibInTheRoundRelaxation) {
   const std::string out = fresh_dir("relax_round");
   std::string output;
   ASSERT_EQ(run_app("relax rib2x2 --round --rows 6 --cols 8 --max-time 0.05 --check-every 100 "
-                    "--quiet --threads 1 --out " + out,
+                    "--quiet --threads 1 --out " +
+                        out,
                     output),
             0)
       << output;
@@ -103,10 +105,9 @@ std::uint64_t fnv1a(const Eigen::Matrix3Xd& points) {
 }
 
 TEST(ReferenceStates, Generated42x32KnitsAreByteIdentical) {
-  const std::pair<const char*, std::uint64_t> expected[] = {
-      {"stockinette", 0x63867a14978c6aeaull},
-      {"garter", 0x088d399a468a83efull},
-      {"rib2x2", 0x90c595887d3e5e07ull}};
+  const std::pair<const char*, std::uint64_t> expected[] = {{"stockinette", 0x63867a14978c6aeaull},
+                                                            {"garter", 0x088d399a468a83efull},
+                                                            {"rib2x2", 0x90c595887d3e5e07ull}};
   for (const auto& [pattern, hash] : expected) {
     KnitOptions o;
     o.rows = 42;

@@ -22,10 +22,10 @@ namespace knit {
 /// r = 0.125 cm a stitch is 0.98 cm wide, rows are 0.74 cm apart, yarns that cross are
 /// 0.44 cm apart in z (loop_depth) and a plain loop uses about 4.1 cm of yarn.
 struct KnitOptions {
-  int rows = 6;                 ///< courses (rows) of the piece
-  int cols = 6;                 ///< stitches per row (around the tube when in_the_round)
-  int segments_per_stitch = 8;  ///< spline segments fitted to each stitch (≥ 4)
-  bool in_the_round = false;    ///< knit a tube (helix, no turns) instead of a flat piece
+  int rows = 6;                       ///< courses (rows) of the piece
+  int cols = 6;                       ///< stitches per row (around the tube when in_the_round)
+  int segments_per_stitch = 8;        ///< spline segments fitted to each stitch (≥ 4)
+  bool in_the_round = false;          ///< knit a tube (helix, no turns) instead of a flat piece
   double radius = Material{}.radius;  ///< yarn radius r (cm), the material default
   /// "Stitch size": yarn length per stitch (cm), the one knob a knitter turns by changing
   /// needles. When > 0 it scales the stitch width and row height together (the depth stays
