@@ -138,3 +138,31 @@ TEST(StepData, ContactSetMatchesThePointPairs) {
 
 }  // namespace
 }  // namespace knit
+
+namespace knit {
+namespace {
+
+// a step that needed more than half the projection's iterations says so; the summary
+// counts the steps with each warning
+TEST(StepData, WarningsReachTheSummary) {
+  Scene scene = parse_scene(nlohmann::json::parse(R"({
+      "params": {"max_projection_iterations": 3, "constraint_tolerance": 1e-12},
+      "time_step": 0.0001, "duration": 0.01,
+      "yarns": [{"line": {"from": [0, 0, 0], "to": [10, 0, 0], "segments": 20}}],
+      "pins": [{"yarn": 0, "at": "start"}]})"),
+                            "pendulum.json");
+  Simulator sim(scene.model);
+  RunOptions o;
+  o.duration = scene.duration;
+  o.progress = false;
+  const RunReport r = run_simulation(sim, scene.state, o);
+  ASSERT_EQ(r.summary["status"], "ok") << r.summary.dump(2);
+  ASSERT_TRUE(r.summary.contains("warnings")) << r.summary.dump(2);
+  const auto& w = r.summary["warnings"];
+  ASSERT_TRUE(w.contains("the projection needed more than half its iterations")) << w.dump();
+  EXPECT_GT(w["the projection needed more than half its iterations"].get<int>(), 0);
+  EXPECT_LE(w["the projection needed more than half its iterations"].get<int>(), r.steps);
+}
+
+}  // namespace
+}  // namespace knit

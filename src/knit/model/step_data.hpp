@@ -89,7 +89,8 @@ struct StepData {
   /// name, "projection", each filter's name, "record"
   std::map<std::string, double> stage_seconds;
   /// per-step notes that did not stop the step (e.g. the projection nearly ran out of
-  /// iterations, yarns came closer than half the contact distance)
+  /// iterations, yarns came closer than half the contact distance): a fixed text, then
+  /// the step's numbers in parentheses (the summary counts steps by the fixed text)
   std::vector<std::string> warnings;
 
   /// The record of a term, or nullptr.

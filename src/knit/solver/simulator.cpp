@@ -234,8 +234,9 @@ StepResult Simulator::step(State& state, double h) {
   m_data.warnings.clear();
   const int max_it = m_model.params.solver.max_projection_iterations;
   if (res.projection.iterations > max_it / 2)
-    m_data.warnings.push_back("the projection needed " + std::to_string(res.projection.iterations) +
-                              " of " + std::to_string(max_it) + " iterations");
+    m_data.warnings.push_back("the projection needed more than half its iterations (" +
+                              std::to_string(res.projection.iterations) + " of " +
+                              std::to_string(max_it) + ")");
   // the force records at the result (the next step's first evaluation); the projection
   // ended by evaluating C at exactly these positions and time, so max |C| is known
   forward(state, res.projection.max_violation);
