@@ -306,11 +306,11 @@ std::string plot_stretch_runs(const std::vector<std::string>& dirs, const std::s
     std::string label = fs::path(d).filename().string();
     std::ifstream in(fs::path(d) / "summary.json");
     const nlohmann::json s = nlohmann::json::parse(in, nullptr, false);
-        if (s.is_object() && s.contains("direction") && s["direction"].is_string()) {
-      label = (s.contains("pattern") && s["pattern"].is_string()
-                   ? s["pattern"].get<std::string>() + " "
-                   : std::string()) +
-              s["direction"].get<std::string>();
+    if (s.is_object() && s.contains("direction") && s["direction"].is_string()) {
+      label =
+          (s.contains("pattern") && s["pattern"].is_string() ? s["pattern"].get<std::string>() + " "
+                                                             : std::string()) +
+          s["direction"].get<std::string>();
       if (s.contains("speed_cm_s") && s["speed_cm_s"].is_number()) {
         std::ostringstream speed;
         speed << std::setprecision(3) << s["speed_cm_s"].get<double>();

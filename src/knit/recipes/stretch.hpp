@@ -83,7 +83,8 @@ nlohmann::json stretch_measures(const std::vector<StretchSample>& curve, double 
 void write_stretch_csv(const std::vector<StretchSample>& curve, const std::string& path);
 
 /// Draws the force–strain curves (moving clamp) of several stretch runs' directories in
-/// one plot, each labelled "PATTERN DIRECTION, SPEED cm/s" from its summary. Returns the path written.
+/// one plot, each labelled "PATTERN DIRECTION, SPEED cm/s" from its summary. Returns the path
+/// written.
 std::string plot_stretch_runs(const std::vector<std::string>& dirs, const std::string& out_png);
 
 }  // namespace knit
