@@ -120,7 +120,11 @@ void Simulator::forward(const State& state, double known_violation) {
   // bitwise the one a step's first evaluation gives), recording each term's share
   m_force0.setZero(state.q.size());
   m_data.terms.resize(m_terms.size());
+  // reset the contact record but keep its pair list's storage (no allocation per step)
+  std::vector<ContactPairRecord> pairs = std::move(m_data.contact.pairs);
+  pairs.clear();
   m_data.contact = ContactRecord{};
+  m_data.contact.pairs = std::move(pairs);
   double e = 0;
   Eigen::Vector3d before = Eigen::Vector3d::Zero();
   for (size_t t = 0; t < m_terms.size(); ++t) {
