@@ -7,7 +7,7 @@ cd "$(dirname "$0")/.."
 packages=(
   build-essential cmake ninja-build pkg-config
   libeigen3-dev libtbb-dev libembree-dev nlohmann-json3-dev libcli11-dev
-  libpng-dev libstb-dev libgtest-dev libgmock-dev libbenchmark-dev
+  libpng-dev zlib1g-dev libstb-dev libgtest-dev libgmock-dev libbenchmark-dev
   ffmpeg gnuplot-nox clang-format
 )
 missing=()

@@ -2,11 +2,13 @@
 // Builds the interlocked yarn of a knit pattern and relaxes it to rest (MODEL.md §6): a
 // thin adapter over the relax_knit / relax_yarns recipes (src/knit/recipes/relax_knit.hpp),
 // which hold the recipe and its defaults.
+#include <cstdio>
 #include <iostream>
 #include <memory>
 
 #include "commands.hpp"
 #include "common.hpp"
+#include "knit/io/run_dir.hpp"
 #include "knit/io/state_file.hpp"
 #include "knit/recipes/relax_knit.hpp"
 
@@ -41,43 +43,51 @@ void register_relax(CLI::App& app) {
   cmd->add_option(
          "--scale", o->yarns.import.scale,
          "with --from: multiply coordinates (default: the file's yarn radius becomes 0.125 cm)")
-      ->check(CLI::PositiveNumber);
+      ->check(finite_positive(1e6));
   cmd->add_option("--out,-o", o->out, "output directory")->required();
   cmd->add_flag("--overwrite", o->overwrite,
                 "replace the files of an earlier run in the output directory");
-  cmd->add_option("--rows", o->knit.knit.rows, "rows (courses)")->check(CLI::PositiveNumber);
-  cmd->add_option("--cols", o->knit.knit.cols, "stitches per row")->check(CLI::PositiveNumber);
+  cmd->add_option("--rows", o->knit.knit.rows, "rows (courses), at least 2")
+      ->check(CLI::Range(2, 1'000'000));
+  cmd->add_option(
+         "--cols", o->knit.knit.cols,
+         "stitches per row, at least 2 (" + std::to_string(knit::MIN_ROUND_COLS) + " in the round)")
+      ->check(CLI::Range(2, 1'000'000));
   cmd->add_option("--segments-per-stitch", o->knit.knit.segments_per_stitch,
                   "spline segments per stitch")
-      ->check(CLI::Range(4, 64));
+      ->check(CLI::Range(knit::MIN_SEGMENTS_PER_STITCH, knit::MAX_SEGMENTS_PER_STITCH));
   cmd->add_flag("--round", o->knit.knit.in_the_round, "knit in the round (a tube)");
   cmd->add_option("--stitch-size", o->knit.knit.stitch_size_cm,
-                  "yarn length per stitch before shrinking (cm; 0 = default for the yarn)")
-      ->check(CLI::NonNegativeNumber);
+                  "yarn length per stitch before shrinking (cm; 0 = default for the yarn; "
+                  "working range " +
+                      knit::short_number(knit::MIN_STITCH_SIZE_RADII) + "–" +
+                      knit::short_number(knit::MAX_STITCH_SIZE_RADII) + " yarn radii)")
+      ->check(finite_range(0, 1e3));
   cmd->add_option("--contact-points", o->contact_points, "contact quadrature points per segment")
       ->check(CLI::Range(1, 64));
   cmd->add_option("--shrink", o->shrink, "rest-length shrink factor c")
-      ->check(CLI::Range(0.5, 1.0));
+      ->check(finite_range(knit::MIN_SHRINK, knit::MAX_SHRINK));
   cmd->add_option("--k-global", o->material.k_global,
                   "global damping k_global (g/s; default 0.15 for patterns, 1.5 with --from)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(finite_range(0, 1e6));
   cmd->add_option("--alpha-small", o->material.alpha_small,
                   "non-rigid damping of the small regions per step (default 0.3)")
-      ->check(CLI::Range(0.0, 1.0));
+      ->check(finite_range(0, 1));
   cmd->add_option("--alpha-large", o->material.alpha_large,
                   "non-rigid damping of the large regions per step (default 0.3)")
-      ->check(CLI::Range(0.0, 1.0));
+      ->check(finite_range(0, 1));
   cmd->add_option(
          "--time-step", o->time_step,
          "s (default 1/11800; 1/25000 with --from: imported swatches start tightly packed)")
-      ->check(CLI::PositiveNumber);
-  cmd->add_option("--max-time", o->run.max_time, "simulated seconds at most")
-      ->check(CLI::PositiveNumber);
+      ->check(finite_range(knit::param_range("time_step").min, knit::param_range("time_step").max));
+  cmd->add_option("--max-time", o->run.max_time,
+                  "simulated seconds at most (with --resume: seconds more)")
+      ->check(finite_positive(knit::MAX_DURATION));
   cmd->add_option("--ke-threshold", o->run.ke_per_length,
                   "rest when kinetic energy per yarn length falls below (erg/cm)")
-      ->check(CLI::PositiveNumber);
+      ->check(finite_positive(1e12));
   cmd->add_option("--check-every", o->run.check_every, "steps between rest checks and states")
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Range(1, 1'000'000'000));
   add_threads_option(cmd, o->threads);
   cmd->add_flag("--no-frames", o->no_frames, "write only the initial and relaxed states");
   cmd->add_flag("--quiet,-q", o->quiet, "no progress line");
@@ -106,6 +116,11 @@ void register_relax(CLI::App& app) {
       throw std::invalid_argument("relax: give either a PATTERN or --from FILE");
     o->run.out_dir = o->out;
     o->run.overwrite = o->overwrite;
+    o->run.continue_in_place = knit::resumes_in_place(o->resume, o->out);
+    // an interrupted run goes on with this command, for the time it had left
+    const std::vector<std::pair<std::string, std::string>> replace = {
+        {std::string("--max-time"), std::string("{time_left}")}};
+    o->run.resume_command = resume_command(o->out, replace);
     o->run.progress = !o->quiet;
     o->run.write_frames = !o->no_frames;
     auto control = make_thread_control(o->threads);
@@ -120,6 +135,7 @@ void register_relax(CLI::App& app) {
       p.discretisation.contact_points = o->contact_points;
       o->yarns.shrink = o->shrink;
       o->yarns.run = o->run;
+      add_provenance(o->yarns.extra);
       result = knit::relax_yarns(o->from, o->yarns);
     } else {
       knit::Params& p = o->knit.params;
@@ -134,10 +150,12 @@ void register_relax(CLI::App& app) {
         o->knit.resume = &resumed;
       }
       o->knit.extra["resumed_from"] = o->resume;
+      add_provenance(o->knit.extra);
       result = knit::relax_knit(o->pattern, o->knit);
     }
     const knit::RunReport& report = result.report;
     print_report(report, o->out);
+    end_if_interrupted(report);
     export_run(o->out, o->export_format);
     if (o->from.empty()) {
       const auto& s = report.summary;

@@ -1,6 +1,7 @@
 // knitsim render STATE|DIR --out FILE.png|DIR [--size WxH] [--view front|back|side|iso]
 //                [--color-rows] [--spp N]
 // knitsim render --compare A B C --out F.png [--labels a,b,c]
+#include <cctype>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -9,6 +10,7 @@
 
 #include "commands.hpp"
 #include "knit/io/process.hpp"
+#include "knit/io/run_dir.hpp"
 #include "knit/io/states.hpp"
 #include "knit/render/render.hpp"
 
@@ -20,7 +22,7 @@ namespace {
 struct RenderArgs {
   std::string input, out, size = "1024x768", view = "front", labels;
   std::vector<std::string> compare;
-  bool color_rows = false;
+  bool color_rows = false, overwrite = false;
   int spp = 4, shadow_rays = 4, ao_rays = 4;
   double fps = 30;
 };
@@ -31,7 +33,8 @@ knit::RenderOptions options_from(const RenderArgs& a) {
   char tail = 0;
   if (std::sscanf(a.size.c_str(), "%dx%d%c", &w, &h, &tail) != 2 || w < 1 || h < 1 || w > 16384 ||
       h > 16384)
-    throw std::runtime_error("--size " + a.size + ": expected WxH, e.g. 1024x768");
+    throw std::runtime_error("--size " + a.size +
+                             ": expected WxH with W and H from 1 to 16384, e.g. 1024x768");
   o.width = w;
   o.height = h;
   o.view = knit::parse_view(a.view);
@@ -99,7 +102,8 @@ void render_sequence(const RenderArgs& a, knit::RenderOptions o) {
     throw std::runtime_error("--out " + a.out +
                              ": rendering a directory of states writes numbered frames; give a "
                              "directory");
-  fs::create_directories(a.out);
+  // frames of an earlier sequence would end up in this one's movie
+  knit::prepare_run_directory(a.out, a.overwrite);
   // one camera for the whole sequence: frame the union of every state's bounds
   Eigen::AlignedBox3d box;
   for (const auto& f : files) box.extend(knit::state_bounds(knit::read_state_file(f)));
@@ -135,8 +139,31 @@ void render_sequence(const RenderArgs& a, knit::RenderOptions o) {
   std::cout << "wrote " << movie << "\n";
 }
 
+void render_any(const RenderArgs& a, const knit::RenderOptions& o);
+
+void check_png_name(const std::string& out) {
+  std::string ext = fs::path(out).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (ext != ".png")
+    throw std::runtime_error("--out " + out + ": knitsim writes PNG images; give a .png name");
+}
+
 void run_render(const RenderArgs& a) {
   const knit::RenderOptions o = options_from(a);
+  const bool sequence = a.compare.empty() && !a.input.empty() && fs::is_directory(a.input);
+  if (!sequence) check_png_name(a.out);
+  const bool existed = fs::exists(a.out);
+  try {
+    render_any(a, o);
+  } catch (...) {
+    // a failed render leaves nothing it made behind
+    std::error_code ec;
+    if (!existed) fs::remove_all(a.out, ec);
+    throw;
+  }
+}
+
+void render_any(const RenderArgs& a, const knit::RenderOptions& o) {
   if (!a.compare.empty()) {
     if (!a.input.empty()) throw std::runtime_error("give either a state or --compare, not both");
     render_compare(a, o);
@@ -171,6 +198,8 @@ void register_render(CLI::App& app) {
       ->check(CLI::IsMember({"front", "back", "side", "iso"}))
       ->capture_default_str();
   sub->add_flag("--color-rows", a->color_rows, "alternate colours by stitch row");
+  sub->add_flag("--overwrite", a->overwrite,
+                "for a sequence: replace the frames of an earlier render in the --out directory");
   sub->add_option("--spp", a->spp, "samples per pixel")
       ->check(CLI::Range(1, 1024))
       ->capture_default_str();

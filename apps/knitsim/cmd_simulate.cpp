@@ -1,18 +1,21 @@
-// knitsim simulate SCENE.json --out DIR: a thin adapter over the simulate_scene recipe.
+// knitsim simulate SCENE.json --out DIR [--resume STATE]: a thin adapter over the
+// simulate_scene recipe.
 #include <iostream>
 #include <memory>
 
 #include "commands.hpp"
 #include "common.hpp"
+#include "knit/io/run_dir.hpp"
+#include "knit/io/state_file.hpp"
 #include "knit/recipes/simulate_scene.hpp"
 
 namespace knitsim {
 
 void register_simulate(CLI::App& app) {
   struct Opts {
-    std::string scene, out;
+    std::string scene, out, resume;
     int threads = 0;
-    double duration = -1;
+    double duration = 0;
     bool quiet = false, overwrite = false;
     std::string export_format;
   };
@@ -22,24 +25,52 @@ void register_simulate(CLI::App& app) {
   cmd->add_option("--out,-o", opts->out, "output directory")->required();
   cmd->add_flag("--overwrite", opts->overwrite,
                 "replace the files of an earlier run in the output directory");
+  cmd->add_option("--resume", opts->resume,
+                  "go on from a state of an earlier run of this scene (its final.kstate or a "
+                  "frame) to the scene's end; into that run's directory, the run goes on there")
+      ->check(CLI::ExistingFile);
   add_threads_option(cmd, opts->threads);
-  cmd->add_option("--duration", opts->duration, "override the scene's duration (s)");
+  cmd->add_option("--duration", opts->duration, "override the scene's duration (s)")
+      ->check(finite_positive(knit::MAX_DURATION));
   cmd->add_flag("--quiet,-q", opts->quiet, "no progress line");
   add_export_option(cmd, opts->export_format);
-  cmd->callback([opts]() {
+  cmd->callback([opts, cmd]() {
     // everything is validated before anything is written
     knit::Scene scene = knit::load_scene(opts->scene);
-    if (opts->duration >= 0) scene.duration = opts->duration;
-    auto control = make_thread_control(opts->threads);
+    if (cmd->count("--duration")) {
+      knit::check_duration(opts->duration, scene.model.params.solver.time_step);
+      scene.duration = opts->duration;
+    }
     knit::SimulateOptions run;
+    if (!opts->resume.empty()) {
+      const knit::StateFile f = knit::read_state_file(opts->resume);
+      std::vector<int> counts;
+      for (const knit::YarnInfo& y : scene.model.yarns) counts.push_back(y.num_cp());
+      if (f.yarn_cp_counts != counts)
+        throw std::invalid_argument(
+            "--resume " + opts->resume + ": it holds " + std::to_string(f.yarn_cp_counts.size()) +
+            " yarn(s) and " + std::to_string(f.num_cp()) + " control points, but " + opts->scene +
+            " has " + std::to_string(counts.size()) + " and " +
+            std::to_string(scene.model.num_cp()) + ": it is not a state of this scene");
+      if (f.state.time >= scene.duration - 1e-9 * scene.model.params.solver.time_step)
+        throw std::invalid_argument("--resume " + opts->resume +
+                                    ": the state is at t = " + knit::short_number(f.state.time) +
+                                    " s, already at the scene's end (" +
+                                    knit::short_number(scene.duration) +
+                                    " s): give a longer --duration to go on");
+      scene.state = f.state;
+      run.continue_in_place = knit::resumes_in_place(opts->resume, opts->out);
+      run.extra["resumed_from"] = opts->resume;
+    }
+    auto control = make_thread_control(opts->threads);
     run.out_dir = opts->out;
     run.overwrite = opts->overwrite;
     run.progress = !opts->quiet;
     run.extra["scene"] = opts->scene;
+    add_provenance(run.extra);
+    run.resume_command = resume_command(opts->out);
     const knit::RunReport report = knit::simulate_scene(scene, run);
-    print_report(report, opts->out);
-    export_run(opts->out, opts->export_format);
-    if (report.status != knit::StepStatus::OK) throw RunFailed();
+    finish_run(report, opts->out, opts->export_format);
   });
 }
 

@@ -52,16 +52,16 @@ void register_stretch(CLI::App& app) {
       ->check(CLI::Range(1, 64));
   cmd->add_option("--alpha-small", o->stretch.params.material.alpha_small,
                   "non-rigid damping of the small regions per step (default 0.675)")
-      ->check(CLI::Range(0.0, 1.0));
+      ->check(finite_range(0, 1));
   cmd->add_option("--alpha-large", o->stretch.params.material.alpha_large,
                   "non-rigid damping of the large regions per step (default 0.3)")
-      ->check(CLI::Range(0.0, 1.0));
+      ->check(finite_range(0, 1));
   cmd->add_option("--rows", o->relax.knit.rows, "rows of the PATTERN's sample")
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Range(2, 1'000'000));
   cmd->add_option("--cols", o->relax.knit.cols, "stitches per row of the PATTERN's sample")
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Range(2, 1'000'000));
   cmd->add_option("--relax-time", o->relax_time, "seconds of relaxation before the pull")
-      ->check(CLI::PositiveNumber);
+      ->check(finite_positive(knit::MAX_DURATION));
   add_threads_option(cmd, o->threads);
   cmd->add_flag("--no-frames", o->no_frames, "write no states along the way");
   cmd->add_flag("--quiet,-q", o->quiet, "no progress line");
@@ -81,6 +81,7 @@ void register_stretch(CLI::App& app) {
     o->stretch.overwrite = o->overwrite;
     o->stretch.progress = !o->quiet;
     o->stretch.write_frames = !o->no_frames;
+    add_provenance(o->stretch.extra);
     knit::check_run_directory(o->out, o->overwrite);  // before a relaxation of minutes
     auto control = make_thread_control(o->threads);
     std::string from = o->from;
@@ -112,6 +113,7 @@ void register_stretch(CLI::App& app) {
       std::remove(temp.c_str());
     }
     print_report(result.report, o->out);
+    end_if_interrupted(result.report);
     const auto& m = result.report.summary["stretch"];
     std::cout << "stretched " << o->direction << " to strain " << o->stretch.to_strain
               << ": initial clamp separation " << result.initial_separation << " cm, max force "

@@ -10,5 +10,6 @@ void register_export(CLI::App& app);
 void register_render(CLI::App& app);
 void register_plot(CLI::App& app);
 void register_stretch(CLI::App& app);
+void register_version(CLI::App& app);
 
 }  // namespace knitsim

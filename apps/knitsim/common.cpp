@@ -1,16 +1,87 @@
 #include "common.hpp"
 
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <iostream>
 
 #include "knit/io/export.hpp"
 #include "knit/io/states.hpp"
+#include "knit/model/params.hpp"
+#include "knit/solver/interrupt.hpp"
 
 namespace knitsim {
 
+namespace {
+
+std::vector<std::string> g_args;
+std::string g_program = "knitsim";
+
+std::string shell_quote(const std::string& s) {
+  if (!s.empty() && s.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
+                                        "0123456789-_./=:,+@%") == std::string::npos)
+    return s;
+  std::string out = "'";
+  for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+
+std::string join_quoted(const std::string& program, const std::vector<std::string>& args) {
+  std::string out = program;
+  for (const std::string& a : args) out += " " + shell_quote(a);
+  return out;
+}
+
+}  // namespace
+
+void set_command_line(int argc, char** argv) {
+  g_args.assign(argv + 1, argv + argc);
+  g_program = "knitsim";
+}
+
+const std::vector<std::string>& command_args() {
+  return g_args;
+}
+
+std::string command_line() {
+  return join_quoted(g_program, g_args);
+}
+
+CLI::Validator finite_range(double lo, double hi) {
+  const std::string desc = "in [" + knit::short_number(lo) + ", " + knit::short_number(hi) + "]";
+  return CLI::Validator(
+      [lo, hi, desc](std::string& text) -> std::string {
+        char* end = nullptr;
+        const double x = std::strtod(text.c_str(), &end);
+        if (end == text.c_str() || *end != '\0') return "'" + text + "' is not a number";
+        if (!std::isfinite(x))
+          return "'" + text + "' is not a finite number (expected one " + desc + ")";
+        if (x < lo || x > hi)
+          return knit::short_number(x) + " is outside the working range " + desc.substr(3);
+        return "";
+      },
+      "FLOAT " + desc);
+}
+
+CLI::Validator finite_positive(double hi) {
+  const std::string desc = hi < 1e300 ? "in (0, " + knit::short_number(hi) + "]" : "> 0";
+  return CLI::Validator(
+      [hi, desc](std::string& text) -> std::string {
+        char* end = nullptr;
+        const double x = std::strtod(text.c_str(), &end);
+        if (end == text.c_str() || *end != '\0') return "'" + text + "' is not a number";
+        if (!std::isfinite(x))
+          return "'" + text + "' is not a finite number (expected one " + desc + ")";
+        if (!(x > 0) || x > hi) return knit::short_number(x) + " is not " + desc;
+        return "";
+      },
+      "FLOAT " + desc);
+}
+
 void add_threads_option(CLI::App* cmd, int& threads) {
   cmd->add_option("--threads,-j", threads, "worker threads (0 = all cores)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(CLI::Range(0, 4096));
 }
 
 std::unique_ptr<tbb::global_control> make_thread_control(int threads) {
@@ -60,9 +131,63 @@ void print_report(const knit::RunReport& report, const std::string& out_dir) {
             << s["sim_time_s"].get<double>() << " s simulated in " << s["wall_time_s"].get<double>()
             << " s wall (" << s["threads"].get<int>() << " threads); outputs in " << out_dir
             << "/\n";
+  if (report.status == knit::StepStatus::INTERRUPTED) {
+    std::cerr << "knitsim: " << report.message << "; the state is in " << out_dir
+              << "/final.kstate\n";
+    if (s.contains("resume_command"))
+      std::cerr << "  to go on: " << s["resume_command"].get<std::string>() << "\n";
+    return;
+  }
   if (!report.message.empty())
     std::cerr << "knitsim: " << report.message << "\n  last good state: " << out_dir
               << "/last_good.kstate\n";
+}
+
+std::string resume_command(const std::string& out_dir,
+                           const std::vector<std::pair<std::string, std::string>>& replace) {
+  std::vector<std::string> args;
+  auto replaced = [&](const std::string& a) {
+    if (a == "--resume") return true;
+    for (const auto& [name, value] : replace)
+      if (a == name) return true;
+    return false;
+  };
+  for (size_t k = 0; k < g_args.size(); ++k) {
+    const std::string& a = g_args[k];
+    if (a == "--overwrite") continue;
+    if (replaced(a)) {
+      ++k;  // and its value
+      continue;
+    }
+    const size_t eq = a.find('=');
+    if (eq != std::string::npos && replaced(a.substr(0, eq))) continue;
+    args.push_back(a);
+  }
+  args.push_back("--resume");
+  args.push_back((std::filesystem::path(out_dir) / "final.kstate").string());
+  for (const auto& [name, value] : replace) {
+    args.push_back(name);
+    args.push_back(value);
+  }
+  return join_quoted(g_program, args);
+}
+
+void finish_run(const knit::RunReport& report, const std::string& out_dir,
+                const std::string& export_format) {
+  print_report(report, out_dir);
+  end_if_interrupted(report);
+  export_run(out_dir, export_format);
+  if (report.status != knit::StepStatus::OK) throw RunFailed();
+}
+
+void end_if_interrupted(const knit::RunReport& report) {
+  if (report.status != knit::StepStatus::INTERRUPTED) return;
+  const int sig = knit::interrupt_signal();
+  throw RunInterrupted{sig != 0 ? sig : 2};
+}
+
+void add_provenance(nlohmann::json& extra) {
+  extra["command_line"] = command_line();
 }
 
 }  // namespace knitsim

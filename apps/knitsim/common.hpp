@@ -5,6 +5,7 @@
 #include <CLI/CLI.hpp>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "knit/solver/runner.hpp"
 
@@ -12,6 +13,23 @@ namespace knitsim {
 
 /// Thrown when a run ended with a failure already reported to the user (exit code 2).
 struct RunFailed {};
+/// Thrown when a run was interrupted by a signal and wrote its state (exit 128 + signal).
+struct RunInterrupted {
+  int signal;
+};
+
+/// Remembers the command line (for the summaries' provenance and resume commands).
+void set_command_line(int argc, char** argv);
+/// The command line as a shell would take it back (arguments quoted where needed).
+std::string command_line();
+/// The command line's arguments after the program name.
+const std::vector<std::string>& command_args();
+
+/// A CLI11 check: a finite number in [lo, hi] (NaN and infinities refused; the message
+/// names the range without printing 300 digits).
+CLI::Validator finite_range(double lo, double hi);
+/// A CLI11 check: a finite number > 0 and at most `hi`.
+CLI::Validator finite_positive(double hi = 1e300);
 
 /// Adds --threads N (0 = all cores).
 void add_threads_option(CLI::App* cmd, int& threads);
@@ -24,5 +42,18 @@ void add_export_option(CLI::App* cmd, std::string& format);
 void export_run(const std::string& out_dir, const std::string& format);
 /// One line per run: status, steps, time, where the outputs are.
 void print_report(const knit::RunReport& report, const std::string& out_dir);
+/// The command that resumes this command's run from OUT/final.kstate into OUT: this
+/// command line with --overwrite dropped, --resume replaced, and each `replace` option
+/// (name, value) set to its value.
+std::string resume_command(const std::string& out_dir,
+                           const std::vector<std::pair<std::string, std::string>>& replace = {});
+/// Prints the report, exports, and ends the command as the run ended: returns when it was
+/// ok, throws RunInterrupted or RunFailed otherwise.
+void finish_run(const knit::RunReport& report, const std::string& out_dir,
+                const std::string& export_format);
+/// Throws RunInterrupted when the run was interrupted (after print_report).
+void end_if_interrupted(const knit::RunReport& report);
+/// Adds the summary's provenance fields (the command line) to `extra`.
+void add_provenance(nlohmann::json& extra);
 
 }  // namespace knitsim

@@ -2,12 +2,16 @@
 // each subcommand lives in its own cmd_*.cpp file.
 #include <exception>
 #include <iostream>
+#include <new>
 
 #include "commands.hpp"
 #include "common.hpp"
+#include "knit/solver/interrupt.hpp"
 
 int main(int argc, char** argv) {
+  knitsim::set_command_line(argc, argv);
   CLI::App app{"knitsim " KNIT_VERSION " — yarn-level simulation of knitted cloth"};
+  app.set_version_flag("--version", "knitsim " KNIT_VERSION);
   app.require_subcommand(1);
   knitsim::register_simulate(app);
   knitsim::register_relax(app);
@@ -15,12 +19,21 @@ int main(int argc, char** argv) {
   knitsim::register_render(app);
   knitsim::register_plot(app);
   knitsim::register_stretch(app);
+  knitsim::register_version(app);
+  // the first SIGINT/SIGTERM ends a run cleanly after its current step (state and summary
+  // written); a second one ends the process at once
+  knit::InterruptHandler interrupts;
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
   } catch (const knitsim::RunFailed&) {
     return 2;
+  } catch (const knitsim::RunInterrupted& e) {
+    return 128 + e.signal;
+  } catch (const std::bad_alloc&) {
+    std::cerr << "knitsim: error: out of memory (the request is too large for this machine)\n";
+    return 1;
   } catch (const std::exception& e) {
     std::cerr << "knitsim: error: " << e.what() << "\n";
     return 1;

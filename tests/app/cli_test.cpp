@@ -69,7 +69,7 @@ TEST(Cli, PendulumExampleRunsAndSummarises) {
 TEST(Cli, UnstableRunStopsWithStatusAndKeepsLastGoodState) {
   const std::string scene = ::testing::TempDir() + "/cli_unstable.json";
   std::ofstream(scene) << R"({"yarns": [{"line": {"from": [0,0,0], "to": [5,0,0], "segments": 10}}],
-                              "params": {"k_bend": 1e7}, "time_step": 0.01, "duration": 1})";
+                              "params": {"k_bend": 1e6}, "time_step": 0.01, "duration": 1})";
   const std::string out = temp_dir("cli_unstable_out");
   const Result r = run("simulate " + scene + " --out " + out + " --quiet");
   EXPECT_EQ(r.code, 2) << r.output;

@@ -1,5 +1,7 @@
 #include "knit/io/import.hpp"
 
+#include "knit/io/input_file.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -21,19 +23,8 @@ std::string lower_extension(const std::string& path) {
   return ext;
 }
 
-std::string short_number(double v) {
-  std::ostringstream ss;
-  ss << std::setprecision(4) << v;
-  return ss.str();
-}
-
 std::string read_whole_file(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::runtime_error(path + ": cannot open for reading");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  if (in.bad()) throw std::runtime_error(path + ": read failed");
-  return ss.str();
+  return read_input_file(path, MAX_GEOMETRY_BYTES, "yarn geometry file");
 }
 
 }  // namespace
@@ -45,6 +36,8 @@ bool is_importable(const std::string& path) {
 
 std::vector<RawYarn> read_raw_yarns(const std::string& path) {
   const std::string ext = lower_extension(path);
+  // what the path is (missing, a directory, a device) comes before what it is called
+  check_input_path(path, "yarn geometry file");
   if (!is_importable(path))
     throw std::runtime_error(path + ": unknown yarn file type '" + ext +
                              "' (expected .yarns, .bcc or .obj)");

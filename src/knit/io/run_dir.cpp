@@ -56,6 +56,17 @@ void prepare_run_directory(const std::string& dir, bool overwrite) {
   run_directory(dir, overwrite, true);
 }
 
+bool resumes_in_place(const std::string& state_file, const std::string& dir) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (state_file.empty() || dir.empty() || !fs::is_directory(dir, ec)) return false;
+  const fs::path d = fs::canonical(dir, ec);
+  if (ec) return false;
+  const fs::path parent = fs::canonical(fs::absolute(state_file).parent_path(), ec);
+  if (ec) return false;
+  return parent == d || parent == d / "frames";
+}
+
 void check_run_directory(const std::string& dir, bool overwrite) {
   run_directory(dir, overwrite, false);
 }

@@ -1,6 +1,7 @@
 #include "knit/io/state_file.hpp"
 
 #include "knit/io/byte_reader.hpp"
+#include "knit/io/input_file.hpp"
 
 #include <cmath>
 #include <cstdint>
@@ -10,6 +11,9 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <stdexcept>
+#include <string_view>
+
+#include <zlib.h>
 
 namespace knit {
 namespace {
@@ -18,6 +22,18 @@ constexpr char MAGIC[8] = {'K', 'N', 'I', 'T', 'S', 'T', 'A', 'T'};
 constexpr char END_MAGIC[4] = {'K', 'E', 'N', 'D'};
 
 using detail::put;
+
+// CRC-32 (zlib) of everything before the checksum field
+uint32_t checksum(std::string_view bytes) {
+  uLong crc = crc32(0L, Z_NULL, 0);
+  // zlib takes lengths as uInt: feed it in chunks
+  constexpr size_t CHUNK = 1u << 30;
+  for (size_t pos = 0; pos < bytes.size(); pos += CHUNK) {
+    const size_t n = std::min(CHUNK, bytes.size() - pos);
+    crc = crc32(crc, reinterpret_cast<const Bytef*>(bytes.data() + pos), static_cast<uInt>(n));
+  }
+  return static_cast<uint32_t>(crc);
+}
 
 }  // namespace
 
@@ -133,15 +149,12 @@ void write_state_file(const std::string& path, const StateFile& f) {
     }
   }
   out.append(END_MAGIC, 4);
+  put<uint32_t>(out, checksum(out));
   write_file_atomic(path, out);
 }
 
 StateFile read_state_file(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::runtime_error(path + ": cannot open state file");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  const std::string data = ss.str();
+  const std::string data = read_input_file(path, MAX_STATE_BYTES, "state file");
   detail::ByteReader r(data, path);
   if (r.bytes(8, "magic") != std::string_view(MAGIC, 8))
     r.fail_at(0, "not a knitsim state file (bad magic)");
@@ -149,11 +162,22 @@ StateFile read_state_file(const std::string& path) {
   if (version < 1 || version > STATE_FILE_VERSION)
     r.fail("unsupported state file version " + std::to_string(version) +
            " (this build reads 1 to " + std::to_string(STATE_FILE_VERSION) + ")");
+  if (version >= 3) {
+    // the whole file is checked before any of it is believed
+    if (data.size() < 4 + 24) r.fail_at(data.size(), "file too short for its checksum");
+    uint32_t stored;
+    std::memcpy(&stored, data.data() + data.size() - 4, 4);
+    if (stored != checksum(std::string_view(data).substr(0, data.size() - 4)))
+      r.fail_at(data.size() - 4,
+                "checksum mismatch: the file is corrupted (changed after it was written)");
+  }
   const auto nyarn = r.get<uint32_t>("yarn count");
   const auto flags = r.get<uint32_t>("flags");
   if (flags > (version >= 2 ? 3u : 1u)) r.fail("unknown flags " + std::to_string(flags));
   StateFile f;
   f.state.time = r.get<double>("time");
+  if (!std::isfinite(f.state.time) || f.state.time < 0)
+    r.fail("the time is " + std::to_string(f.state.time) + " s (expected a finite time >= 0)");
   if (nyarn == 0 || nyarn > r.remaining() / 12)
     r.fail("implausible yarn count " + std::to_string(nyarn));
   long long total = 0;
@@ -173,8 +197,16 @@ StateFile read_state_file(const std::string& path) {
   }
   f.state.q.resize(3 * total);
   f.state.v.resize(3 * total);
-  for (long long k = 0; k < 3 * total; ++k) f.state.q[k] = r.get<double>("positions");
-  for (long long k = 0; k < 3 * total; ++k) f.state.v[k] = r.get<double>("velocities");
+  for (long long k = 0; k < 3 * total; ++k) {
+    f.state.q[k] = r.get<double>("positions");
+    if (!std::isfinite(f.state.q[k]))
+      r.fail("control point " + std::to_string(k / 3) + " has a position that is not finite");
+  }
+  for (long long k = 0; k < 3 * total; ++k) {
+    f.state.v[k] = r.get<double>("velocities");
+    if (!std::isfinite(f.state.v[k]))
+      r.fail("control point " + std::to_string(k / 3) + " has a velocity that is not finite");
+  }
   if (flags & 1u) {
     f.stitch.resize(f.num_seg());
     for (auto& s : f.stitch) {
@@ -228,6 +260,7 @@ StateFile read_state_file(const std::string& path) {
     }
   }
   if (r.bytes(4, "end marker") != std::string_view(END_MAGIC, 4)) r.fail("bad end marker");
+  if (version >= 3) r.get<uint32_t>("checksum");  // checked above
   if (r.remaining() != 0) r.fail("unexpected bytes after the end marker");
   return f;
 }

@@ -4,8 +4,8 @@
 // be rendered or exported without its scene. Versioned; written atomically.
 //
 // Layout (little-endian):
-//   "KNITSTAT" | u32 version (1 or 2) | u32 num_yarns | u32 flags | f64 time
-//     flags: bit 0 stitches, bit 1 knit (version 2 only)
+//   "KNITSTAT" | u32 version (1 to 3) | u32 num_yarns | u32 flags | f64 time (s, >= 0)
+//     flags: bit 0 stitches, bit 1 knit (version 2 and later)
 //   per yarn: u32 num_cp | f64 radius (cm)
 //   f64 q[3·num_cp] | f64 v[3·num_cp]
 //   if stitches: per segment i32 row, i32 col
@@ -15,7 +15,9 @@
 //            u32 num_glues | per glue: i32 segment a, f64 t a, i32 segment b, f64 t b,
 //                                      f64 gap[3] (cm), f64 close_time (s)
 //   "KEND"
-// Version 1 files (no knit block) are still read.
+//   u32 CRC-32 (zlib) of every byte before it (version 3)
+// Versions 1 (no knit block) and 2 (no checksum) are still read. Positions, velocities
+// and the time must be finite; a version 3 file whose checksum does not match is refused.
 #include <optional>
 #include <string>
 #include <vector>
@@ -40,7 +42,7 @@ struct StateFile {
   std::vector<int> yarn_cp_begin() const;
 };
 
-inline constexpr unsigned STATE_FILE_VERSION = 2;
+inline constexpr unsigned STATE_FILE_VERSION = 3;
 
 /// Snapshot of a model's layout with the given state.
 StateFile make_state_file(const Model& model, const State& state);

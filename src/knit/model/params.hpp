@@ -6,6 +6,8 @@
 //   SolverSettings  how time is stepped: time step, constraints, tolerances
 // Gravity belongs to the scene the yarn is in and sits beside the three groups.
 #include <Eigen/Core>
+#include <string>
+#include <vector>
 
 namespace knit {
 
@@ -60,5 +62,38 @@ struct Params {
     return p;
   }
 };
+
+/// The working range of a numeric parameter: every value knitsim accepts is finite and
+/// inside it (inclusive). Scene files, the command line and the Python module check
+/// against these ranges before anything runs.
+struct ParamRange {
+  const char* name;  ///< the key in a scene's "params" (and, with '-', the option name)
+  double min, max;
+  const char* unit;
+};
+
+/// Every numeric parameter's range, in the order of the structs above.
+const std::vector<ParamRange>& param_ranges();
+/// The range of parameter `name`; throws std::out_of_range for an unknown name.
+const ParamRange& param_range(const std::string& name);
+
+/// Throws std::invalid_argument naming `name`, its value and its range when `value` is not
+/// finite or outside param_range(name).
+void check_param(const std::string& name, double value);
+
+/// Checks every field of `p` (see param_ranges(); quadrature_points must also be odd,
+/// gravity finite and at most 1e5 cm/s² per axis); throws std::invalid_argument naming the
+/// first bad field.
+void validate_params(const Params& p);
+
+/// Longest simulated duration one run may be asked for (s).
+inline constexpr double MAX_DURATION = 1e5;
+
+/// Throws std::invalid_argument unless `duration` (s) is finite, in (0, MAX_DURATION] and
+/// at least one `time_step` long.
+void check_duration(double duration, double time_step);
+
+/// A number for messages: at most 6 significant digits ("1e+308", not 309 digits).
+std::string short_number(double x);
 
 }  // namespace knit

@@ -1,8 +1,11 @@
 #include "knit/pattern/pattern.hpp"
 
+#include "knit/io/input_file.hpp"
+
 #include <algorithm>
 #include <cctype>
-#include <fstream>
+#include <cstdio>
+#include <filesystem>
 #include <sstream>
 #include <stdexcept>
 
@@ -26,6 +29,8 @@ Pattern parse_chart(std::string_view text, const std::string& source_name) {
   std::vector<Line> lines;
   int line_no = 0;
   size_t pos = 0;
+  // a UTF-8 byte-order mark (editors on some systems write one) is not part of the chart
+  if (text.substr(0, 3) == "\xEF\xBB\xBF") pos = 3;
   while (pos <= text.size()) {
     const size_t end = std::min(text.find('\n', pos), text.size());
     std::string_view raw = text.substr(pos, end - pos);
@@ -38,8 +43,17 @@ Pattern parse_chart(std::string_view text, const std::string& source_name) {
       const char lc = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
       if (lc != 'k' && lc != 'p') {
         std::ostringstream msg;
-        msg << source_name << ":" << line_no << ":" << (i + 1) << ": unknown stitch '" << ch
-            << "' (expected 'k' for knit or 'p' for purl, '#' for a comment)";
+        msg << source_name << ":" << line_no << ":" << (i + 1) << ": unknown stitch ";
+        const auto uc = static_cast<unsigned char>(ch);
+        if (uc >= 0x20 && uc < 0x7f) {
+          msg << "'" << ch << "'";
+        } else {
+          // a byte that does not print (binary data, UTF-8): its value, not the raw byte
+          char buf[16];
+          std::snprintf(buf, sizeof buf, "byte 0x%02X", uc);
+          msg << buf << (uc >= 0x80 ? " (not ASCII; is this a text chart?)" : "");
+        }
+        msg << " (expected 'k' for knit or 'p' for purl, '#' for a comment)";
         throw std::invalid_argument(msg.str());
       }
       stitches.push_back(lc);
@@ -88,16 +102,19 @@ Pattern load_pattern(const std::string& name_or_path) {
   const auto names = builtin_pattern_names();
   if (std::find(names.begin(), names.end(), lower(name_or_path)) != names.end())
     return builtin_pattern(name_or_path);
-  std::ifstream in(name_or_path, std::ios::binary);
-  if (!in) {
+  if (!std::filesystem::exists(name_or_path)) {
     std::string list;
     for (const auto& b : names) list += (list.empty() ? "" : ", ") + b;
     throw std::invalid_argument("pattern '" + name_or_path + "': not a built-in pattern (" + list +
-                                ") and no chart file can be read at that path");
+                                ") and no chart file exists at that path");
   }
-  std::ostringstream text;
-  text << in.rdbuf();
-  return parse_chart(text.str(), name_or_path);
+  std::string text;
+  try {
+    text = read_input_file(name_or_path, MAX_CHART_BYTES, "chart file");
+  } catch (const std::runtime_error& e) {
+    throw std::invalid_argument(e.what());
+  }
+  return parse_chart(text, name_or_path);
 }
 
 Pattern tile(const Pattern& pattern, int rows, int cols) {

@@ -1,11 +1,13 @@
 #include "knit/recipes/relax_knit.hpp"
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <memory>
 
 #include "knit/analysis/fabric_shape.hpp"
 #include "knit/filters/nonrigid_damping.hpp"
+#include "knit/io/input_file.hpp"
 #include "knit/io/run_dir.hpp"
 #include "knit/io/state_file.hpp"
 #include "knit/pattern/pattern.hpp"
@@ -38,14 +40,67 @@ State generated_state(const GeneratedKnit& knit) {
   return state;
 }
 
-// after the run: relaxed.kstate beside final.kstate
-void copy_relaxed(const std::string& out_dir) {
+// after a run that went well: relaxed.kstate beside final.kstate
+void copy_relaxed(const std::string& out_dir, const RunReport& report) {
   if (out_dir.empty()) return;
+  if (report.status != StepStatus::OK) {
+    fs::remove(fs::path(out_dir) / "relaxed.kstate");
+    return;
+  }
   fs::copy_file(fs::path(out_dir) / "final.kstate", fs::path(out_dir) / "relaxed.kstate",
                 fs::copy_options::overwrite_existing);
 }
 
 }  // namespace
+
+void check_shrink(double shrink) {
+  if (!std::isfinite(shrink) || shrink < MIN_SHRINK || shrink > MAX_SHRINK)
+    throw std::invalid_argument("shrink = " + short_number(shrink) +
+                                " is outside its working range [" + short_number(MIN_SHRINK) +
+                                ", " + short_number(MAX_SHRINK) + "]");
+}
+
+void check_knit_relaxation(const KnitOptions& k, double shrink, const Params& params) {
+  check_shrink(shrink);
+  if (k.rows < 2 || k.cols < 2)
+    throw std::invalid_argument("rows = " + std::to_string(k.rows) +
+                                ", cols = " + std::to_string(k.cols) +
+                                ": a knit needs at least 2 rows and 2 columns");
+  if (k.in_the_round && k.cols < MIN_ROUND_COLS)
+    throw std::invalid_argument("cols = " + std::to_string(k.cols) +
+                                ": a tube knit in the round "
+                                "needs at least " +
+                                std::to_string(MIN_ROUND_COLS) + " stitches around");
+  if (k.segments_per_stitch < MIN_SEGMENTS_PER_STITCH ||
+      k.segments_per_stitch > MAX_SEGMENTS_PER_STITCH)
+    throw std::invalid_argument(
+        "segments-per-stitch = " + std::to_string(k.segments_per_stitch) +
+        " is outside its working range [" + std::to_string(MIN_SEGMENTS_PER_STITCH) + ", " +
+        std::to_string(MAX_SEGMENTS_PER_STITCH) + "] (outside it the relaxation goes unstable)");
+  const double r = params.material.radius;
+  if (!std::isfinite(k.stitch_size_cm) ||
+      (k.stitch_size_cm != 0 && (k.stitch_size_cm < MIN_STITCH_SIZE_RADII * r ||
+                                 k.stitch_size_cm > MAX_STITCH_SIZE_RADII * r)))
+    throw std::invalid_argument(
+        "stitch-size = " + short_number(k.stitch_size_cm) + " cm is outside its working range [" +
+        short_number(MIN_STITCH_SIZE_RADII * r) + ", " + short_number(MAX_STITCH_SIZE_RADII * r) +
+        "] cm for yarn of radius " + short_number(r) + " cm (0 = the default)");
+  const double segments =
+      static_cast<double>(k.rows) * k.cols * k.segments_per_stitch + 2.0 * k.rows * 8;
+  if (segments > static_cast<double>(MAX_KNIT_SEGMENTS))
+    throw std::invalid_argument("rows × cols = " + std::to_string(k.rows) + " × " +
+                                std::to_string(k.cols) + " would make " + short_number(segments) +
+                                " spline segments, more than knitsim accepts (" +
+                                short_number(static_cast<double>(MAX_KNIT_SEGMENTS)) + ")");
+  const double need =
+      segments * RELAX_BYTES_PER_SEGMENT * (params.discretisation.contact_points / 10.0 + 1) / 2;
+  const double have = available_memory_bytes();
+  if (have > 0 && need > have)
+    throw std::invalid_argument("rows × cols = " + std::to_string(k.rows) + " × " +
+                                std::to_string(k.cols) + " needs about " + format_bytes(need) +
+                                " of memory, and this machine has " + format_bytes(have) +
+                                " available");
+}
 
 State read_resumed_knit_state(const std::string& path, const std::string& pattern,
                               const KnitOptions& options) {
@@ -101,9 +156,9 @@ State read_resumed_knit_state(const std::string& path, const std::string& patter
 }
 
 KnitRelaxation setup_knit_relaxation(const std::string& pattern_name, const RelaxKnitOptions& o) {
-  if (!(o.shrink >= 0.5 && o.shrink <= 1.0))
-    throw std::invalid_argument("shrink: expected a factor in [0.5, 1], got " +
-                                std::to_string(o.shrink));
+  validate_params(o.params);
+  validate_relax_options(o.run, o.params.solver.time_step);
+  check_knit_relaxation(o.knit, o.shrink, o.params);
   KnitRelaxation r;
   r.knit = generate_knit(load_pattern(pattern_name), o.knit);
   Model model = build_knit_model(r.knit, o.params, o.shrink, o.glue_close_time);
@@ -132,7 +187,8 @@ RelaxResult relax_knit(const std::string& pattern_name, const RelaxKnitOptions& 
   const Model& model = sim.model();
   RelaxResult result{model, setup.state, {}};
   const std::string& out = o.run.out_dir;
-  if (!out.empty()) {
+  check_start(sim, result.state);
+  if (!out.empty() && !o.run.continue_in_place) {
     prepare_run_directory(out, o.run.overwrite);
     write_state_file((fs::path(out) / "initial.kstate").string(),
                      make_state_file(model, result.state));
@@ -162,16 +218,16 @@ RelaxResult relax_knit(const std::string& pattern_name, const RelaxKnitOptions& 
                           const nlohmann::json shape = to_json(measure_fabric(model, st.q));
                           for (const auto& [k, v] : shape.items()) summary[k] = v;
                         });
-  copy_relaxed(out);
+  copy_relaxed(out, result.report);
   return result;
 }
 
 RelaxResult relax_yarns(const std::string& path, const RelaxYarnsOptions& o) {
-  if (!(o.shrink >= 0.5 && o.shrink <= 1.0))
-    throw std::invalid_argument("shrink: expected a factor in [0.5, 1], got " +
-                                std::to_string(o.shrink));
+  check_shrink(o.shrink);
   Params params = o.params;
   params.material.radius = o.import.radius;
+  validate_params(params);
+  validate_relax_options(o.run, params.solver.time_step);
   ModelBuilder builder;
   for (const ImportedYarn& y : import_yarns(path, o.import)) builder.add_yarn(y.control_points);
   const Model model = builder.build(params, o.shrink);
@@ -179,19 +235,20 @@ RelaxResult relax_yarns(const std::string& path, const RelaxYarnsOptions& o) {
   result.state.q = builder.positions();
   result.state.v = Eigen::VectorXd::Zero(result.state.q.size());
   const std::string& out = o.run.out_dir;
-  if (!out.empty()) {
+  Simulator sim(model);
+  check_start(sim, result.state);
+  if (!out.empty() && !o.run.continue_in_place) {
     prepare_run_directory(out, o.run.overwrite);
     write_state_file((fs::path(out) / "initial.kstate").string(),
                      make_state_file(model, result.state));
   }
-  Simulator sim(model);
   nlohmann::json extra = {{"from", path},
                           {"shrink", o.shrink},
                           {"contact_points", params.discretisation.contact_points},
                           {"k_global", params.material.k_global}};
   for (const auto& [k, v] : o.extra.items()) extra[k] = v;
   result.report = relax(sim, result.state, o.run, extra);
-  copy_relaxed(out);
+  copy_relaxed(out, result.report);
   return result;
 }
 

@@ -53,6 +53,34 @@ struct RelaxResult {
   RunReport report;
 };
 
+/// The working range of the knit options for relaxation at the default time step
+/// (1/11800 s), measured on 4×4 stockinette, garter and 2×2 rib over 0.03–0.05 s: outside
+/// it a relaxation goes unstable within a few steps (README, "Guarantees").
+///   segments per stitch: 6, 7, 8 relax; 4, 5 and 9–16 blow up within 0–7 steps
+///   shrink: 0.9–1 relax; 0.85 blows up after 8 steps, 0.8 and below at once
+inline constexpr int MIN_SEGMENTS_PER_STITCH = 6, MAX_SEGMENTS_PER_STITCH = 8;
+inline constexpr double MIN_SHRINK = 0.9, MAX_SHRINK = 1.0;
+/// Stitch size (yarn length per stitch) in yarn radii: 4–20 cm relax at r = 0.125 cm
+/// (3.5 cm blows up after 15 steps, 2–3 cm at once); from 20 cm the loops barely touch and
+/// at 30 cm no yarn touches another: the fabric no longer holds together.
+inline constexpr double MIN_STITCH_SIZE_RADII = 32, MAX_STITCH_SIZE_RADII = 96;
+/// Fewest stitches around a tube knit in the round (3 blows up after 10 steps; 4–6 relax).
+inline constexpr int MIN_ROUND_COLS = 4;
+/// Largest knit accepted (segments), and the memory a relaxation takes per segment
+/// (bytes, measured), checked against the machine's available memory before anything
+/// is generated.
+inline constexpr long long MAX_KNIT_SEGMENTS = 20'000'000;
+inline constexpr double RELAX_BYTES_PER_SEGMENT = 20e3;
+
+/// Throws std::invalid_argument naming the option when the shrink factor is outside
+/// [MIN_SHRINK, MAX_SHRINK] (or not finite).
+void check_shrink(double shrink);
+/// Throws std::invalid_argument naming the option and its working range when a knit
+/// cannot be relaxed as asked: at least 2 rows and 2 columns (MIN_ROUND_COLS in the
+/// round), segments per stitch, stitch size and shrink within their ranges, and a size
+/// whose estimated memory fits in the machine's available memory.
+void check_knit_relaxation(const KnitOptions& knit, double shrink, const Params& params);
+
 /// The set-up of relax_knit without the run: the generated knit, the simulator (model
 /// with shrunk rest lengths and closing glues, model.knit set, non-rigid damping filter)
 /// and the state to start from. For tests and callers that step by hand.

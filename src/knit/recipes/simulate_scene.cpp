@@ -17,6 +17,9 @@ std::unique_ptr<Simulator> make_scene_simulator(const Scene& scene) {
 RunOptions scene_run_options(const Scene& scene, const SimulateOptions& o) {
   RunOptions run;
   run.duration = scene.duration;
+  run.end_time = scene.duration;  // scenes start at t = 0; a resumed one goes on to the end
+  run.continue_in_place = o.continue_in_place;
+  run.resume_command = o.resume_command;
   run.output_every = scene.output_every;
   run.out_dir = o.out_dir;
   run.progress = o.progress;
@@ -27,8 +30,11 @@ RunOptions scene_run_options(const Scene& scene, const SimulateOptions& o) {
 
 RunReport simulate_scene(Scene& scene, const SimulateOptions& o) {
   auto sim = make_scene_simulator(scene);
-  if (!o.out_dir.empty()) prepare_run_directory(o.out_dir, o.overwrite);
   RunOptions run = scene_run_options(scene, o);
+  validate_params(scene.model.params);
+  check_duration(scene.duration, scene.model.params.solver.time_step);
+  check_start(*sim, scene.state);
+  if (!o.out_dir.empty() && !o.continue_in_place) prepare_run_directory(o.out_dir, o.overwrite);
   if (!scene.knits.empty()) {
     nlohmann::json knits = nlohmann::json::array();
     for (const SceneKnit& k : scene.knits)

@@ -20,6 +20,10 @@ struct SimulateOptions {
   bool overwrite = false;  ///< empty a directory that holds another run's files first
   bool progress = true;    ///< progress line on stderr
   bool write_frames = true;
+  /// The scene's state was resumed from a state of the run in out_dir: go on there (see
+  /// RunOptions::continue_in_place) instead of requiring an empty directory.
+  bool continue_in_place = false;
+  std::string resume_command;  ///< written into the summary of an interrupted run
   nlohmann::json extra = nlohmann::json::object();  ///< merged into the summary
 };
 
@@ -27,7 +31,8 @@ struct SimulateOptions {
 /// directory, progress line, frames and summary fields.
 RunOptions scene_run_options(const Scene& scene, const SimulateOptions& options);
 
-/// Runs `scene` from scene.state (which ends as the last state) for scene.duration.
+/// Runs `scene` from scene.state (which ends as the last state) until t = scene.duration
+/// (a resumed state goes on to the same end).
 RunReport simulate_scene(Scene& scene, const SimulateOptions& options);
 
 }  // namespace knit

@@ -150,14 +150,15 @@ StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions&
   // everything is validated before anything is written
   if (!(o.to_strain > 0) || !std::isfinite(o.to_strain) || o.to_strain > 10)
     throw std::invalid_argument("--to: expected a strain in (0, 10], got " +
-                                std::to_string(o.to_strain));
+                                short_number(o.to_strain));
   if (!(o.speed > 0) || !std::isfinite(o.speed) || o.speed > 1000)
-    throw std::invalid_argument("--speed: expected (0, 1000] cm/s, got " + std::to_string(o.speed));
+    throw std::invalid_argument("--speed: expected (0, 1000] cm/s, got " + short_number(o.speed));
   if (o.cycles < 0 || o.cycles > 100)
     throw std::invalid_argument("--cycles: expected 0 to 100, got " + std::to_string(o.cycles));
   if (o.clamp_stitches < 1) throw std::invalid_argument("--clamp-stitches: expected at least 1");
   if (!(o.output_strain > 0) || !(o.output_strain <= o.to_strain))
     throw std::invalid_argument("output strain: expected (0, --to]");
+  validate_params(o.params);
   const StateFile file = read_state_file(kstate_path);
   if (file.stitch.empty())
     throw std::invalid_argument(kstate_path +
@@ -262,6 +263,7 @@ StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions&
                {"clamp_stitches", o.clamp_stitches},
                {"from", kstate_path},
                {"axis", {axis[0], axis[1], axis[2]}}};
+  for (const auto& [k, v] : o.extra.items()) run.extra[k] = v;
   if (file.knit) {
     run.extra["pattern"] = file.knit->pattern;
     run.extra["rows"] = file.knit->rows;

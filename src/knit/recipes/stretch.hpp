@@ -40,6 +40,7 @@ struct StretchOptions {
   bool overwrite = false;
   bool progress = true;
   bool write_frames = true;
+  nlohmann::json extra = nlohmann::json::object();  ///< merged into the summary
 };
 
 /// One sample of the curve.

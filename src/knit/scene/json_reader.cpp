@@ -2,17 +2,61 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <sstream>
+
+#include "knit/io/input_file.hpp"
 
 namespace knit {
 
 namespace {
+
+// A short description of a value for messages: its type and a bounded prefix, never the
+// whole value (a value may be megabytes long or nested thousands deep).
 std::string describe(const nlohmann::json& v) {
-  std::string s = v.dump();
-  if (s.size() > 40) s = s.substr(0, 37) + "...";
-  return s;
+  switch (v.type()) {
+    case nlohmann::json::value_t::object:
+      return "an object with " + std::to_string(v.size()) + (v.size() == 1 ? " key" : " keys");
+    case nlohmann::json::value_t::array:
+      return "an array of " + std::to_string(v.size()) + (v.size() == 1 ? " element" : " elements");
+    case nlohmann::json::value_t::string: {
+      const std::string& str = v.get_ref<const std::string&>();
+      std::string shown = str.size() > 24 ? str.substr(0, 24) : str;
+      // keep the prefix printable: other bytes as \xNN
+      std::string out;
+      for (unsigned char c : shown) {
+        if (c >= 0x20 && c < 0x7f && c != '"') {
+          out += static_cast<char>(c);
+        } else {
+          char buf[8];
+          std::snprintf(buf, sizeof buf, "\\x%02X", c);
+          out += buf;
+        }
+      }
+      return "the string \"" + out + (str.size() > 24 ? "...\"" : "\"");
+    }
+    case nlohmann::json::value_t::boolean:
+      return v.get<bool>() ? "true" : "false";
+    case nlohmann::json::value_t::null:
+      return "null";
+    default: {
+      if (v.is_number_float()) {
+        char buf[32];
+        std::snprintf(buf, sizeof buf, "%.6g", v.get<double>());
+        return buf;
+      }
+      return v.dump();  // an integer: at most 20 characters
+    }
+  }
 }
+
+// the parser's message quotes the offending token, which may be megabytes long
+std::string shorten(const std::string& message) {
+  constexpr size_t MAX = 200;
+  return message.size() <= MAX ? message : message.substr(0, MAX) + "…";
+}
+
 }  // namespace
 
 void JsonReader::fail(const std::string& expected) const {
@@ -98,13 +142,26 @@ Eigen::Vector3d JsonReader::vec3() const {
 }
 
 nlohmann::json parse_json_file(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path + ": cannot open file");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  const std::string text = ss.str();
+  std::string text;
   try {
-    return nlohmann::json::parse(text);
+    text = read_input_file(path, MAX_SCENE_BYTES, "JSON file");
+  } catch (const std::runtime_error& e) {
+    throw InputError(e.what());
+  }
+  return parse_json_text(text, path);
+}
+
+nlohmann::json parse_json_text(const std::string& text, const std::string& path) {
+  // nesting deeper than any scene needs is refused while parsing, before the document is
+  // built (deep documents exhaust the stack of anything that walks them recursively)
+  auto limit_depth = [&](int depth, nlohmann::json::parse_event_t, nlohmann::json&) {
+    if (depth > MAX_JSON_DEPTH)
+      throw InputError(path + ": JSON nested more than " + std::to_string(MAX_JSON_DEPTH) +
+                       " levels deep (a scene needs a few)");
+    return true;
+  };
+  try {
+    return nlohmann::json::parse(text, limit_depth);
   } catch (const nlohmann::json::parse_error& e) {
     // translate the byte offset into line and column
     size_t line = 1, col = 1;
@@ -117,9 +174,9 @@ nlohmann::json parse_json_file(const std::string& path) {
       }
     }
     throw InputError(path + ":" + std::to_string(line) + ":" + std::to_string(col) +
-                     ": malformed JSON: " + e.what());
+                     ": malformed JSON: " + shorten(e.what()));
   } catch (const nlohmann::json::exception& e) {
-    throw InputError(path + ": malformed JSON: " + e.what());
+    throw InputError(path + ": malformed JSON: " + shorten(e.what()));
   }
 }
 

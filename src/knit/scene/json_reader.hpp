@@ -53,7 +53,13 @@ class JsonReader {
   std::string m_source, m_path;
 };
 
-/// Parses a JSON file; syntax errors name the file, line and column.
+/// Deepest nesting of arrays and objects a JSON input may have.
+inline constexpr int MAX_JSON_DEPTH = 64;
+
+/// Parses a JSON file (a regular file of at most MAX_SCENE_BYTES); syntax errors name the
+/// file, line and column; nesting deeper than MAX_JSON_DEPTH is refused.
 nlohmann::json parse_json_file(const std::string& path);
+/// The same for text already in memory; `path` names it in messages.
+nlohmann::json parse_json_text(const std::string& text, const std::string& path);
 
 }  // namespace knit

@@ -333,6 +333,15 @@ Params parse_params(const JsonReader& r, Params p) {
   if (r.has("max_projection_iterations"))
     p.solver.max_projection_iterations = r.at("max_projection_iterations").integer(1);
   if (r.has("time_step")) p.solver.time_step = r.at("time_step").positive();
+  // every field within its working range (params.hpp), named by its key
+  for (const ParamRange& range : param_ranges())
+    if (r.has(range.name)) {
+      try {
+        check_param(range.name, r.at(range.name).number());
+      } catch (const std::invalid_argument& e) {
+        r.at(range.name).fail(e.what());
+      }
+    }
   return p;
 }
 
@@ -347,8 +356,27 @@ Scene parse_scene(const nlohmann::json& doc, const std::string& source, const Pa
     if (root.has("params") && root.at("params").has("time_step"))
       root.at("time_step").fail("the time step is given twice (also in \"params\")");
     params.solver.time_step = root.at("time_step").positive();
+    try {
+      check_param("time_step", params.solver.time_step);
+    } catch (const std::invalid_argument& e) {
+      root.at("time_step").fail(e.what());
+    }
   }
-  if (root.has("duration")) scene.duration = root.at("duration").positive(true);
+  if (root.has("gravity")) {
+    try {
+      validate_params(params);
+    } catch (const std::invalid_argument& e) {
+      root.at("gravity").fail(e.what());
+    }
+  }
+  if (root.has("duration")) {
+    scene.duration = root.at("duration").positive();
+    try {
+      check_duration(scene.duration, params.solver.time_step);
+    } catch (const std::invalid_argument& e) {
+      root.at("duration").fail(e.what());
+    }
+  }
   if (root.has("output_every")) scene.output_every = root.at("output_every").integer(1);
   if (root.has("description")) root.at("description").string();
   if (!root.has("knits")) root.at("yarns");  // a scene without knits needs yarns

@@ -1,6 +1,23 @@
 #include "knit/solver/relaxation.hpp"
 
+#include <cmath>
+#include <stdexcept>
+
 namespace knit {
+
+void validate_relax_options(const RelaxOptions& o, double time_step) {
+  try {
+    check_duration(o.max_time, time_step);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("max-time: ") + e.what());
+  }
+  if (!std::isfinite(o.ke_per_length) || !(o.ke_per_length > 0))
+    throw std::invalid_argument("ke-threshold = " + short_number(o.ke_per_length) +
+                                " erg/cm: expected a finite number > 0");
+  if (o.check_every < 1)
+    throw std::invalid_argument("check-every = " + std::to_string(o.check_every) +
+                                ": expected at least 1 step");
+}
 
 RunReport relax(Simulator& sim, State& state, const RelaxOptions& o, nlohmann::json extra,
                 std::function<void(Simulator&, const State&, nlohmann::json&)> on_finish) {
@@ -12,6 +29,8 @@ RunReport relax(Simulator& sim, State& state, const RelaxOptions& o, nlohmann::j
   run.out_dir = o.out_dir;
   run.progress = o.progress;
   run.write_frames = o.write_frames;
+  run.continue_in_place = o.continue_in_place;
+  run.resume_command = o.resume_command;
   run.stop_when = [&](const StepData& data, const State&) {
     reached = data.kinetic_energy / length < o.ke_per_length;
     return reached;

@@ -17,7 +17,16 @@ struct RelaxOptions {
   bool overwrite = false;       ///< empty a directory that holds another run's files first
   bool progress = true;
   bool write_frames = true;
+  /// The run resumes from a state of the run in out_dir and goes on there (see
+  /// RunOptions::continue_in_place).
+  bool continue_in_place = false;
+  std::string resume_command;  ///< written into the summary of an interrupted run
 };
+
+/// Throws std::invalid_argument naming the option when a RelaxOptions field is out of
+/// range (max_time: a duration for time step h; ke_per_length finite and > 0;
+/// check_every ≥ 1).
+void validate_relax_options(const RelaxOptions& options, double time_step);
 
 /// The shrink factor c of MODEL.md §6.
 inline constexpr double RELAX_SHRINK = 0.935;

@@ -7,7 +7,9 @@
 
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
@@ -16,7 +18,9 @@
 #include <map>
 #include <sstream>
 
+#include "knit/io/input_file.hpp"
 #include "knit/io/state_file.hpp"
+#include "knit/solver/interrupt.hpp"
 
 namespace knit {
 
@@ -85,41 +89,186 @@ nlohmann::json constraint_forces_json(const StepData& data) {
   return out;
 }
 
+namespace {
+// closest approach (fraction of the contact distance 2r) a run may start from
+constexpr double MIN_START_DISTANCE_RATIO = 0.05;
+}  // namespace
+
+double next_step_length(double time, double end_time, double h) {
+  const double left = end_time - time;
+  if (left <= 1e-9 * h) return 0;
+  if (left > 1.5 * h) return h;
+  if (std::abs(left - h) <= 1e-9 * h) return h;
+  if (left <= h) return left;
+  return 0.5 * left;  // (h, 1.5 h]: two steps in (h/2, 3h/4] rather than one of h and a sliver
+}
+
+nlohmann::json params_json(const Params& p) {
+  const Material& m = p.material;
+  return {{"material",
+           {{"radius", m.radius},
+            {"density", m.density},
+            {"k_len", m.k_len},
+            {"k_bend", m.k_bend},
+            {"k_global", m.k_global},
+            {"k_contact", m.k_contact},
+            {"k_dt", m.k_dt},
+            {"k_dn", m.k_dn},
+            {"alpha_small", m.alpha_small},
+            {"alpha_large", m.alpha_large},
+            {"contact", m.contact}}},
+          {"discretisation",
+           {{"quadrature_points", p.discretisation.quadrature_points},
+            {"contact_points", p.discretisation.contact_points}}},
+          {"solver",
+           {{"time_step", p.solver.time_step},
+            {"length_constraints", p.solver.length_constraints},
+            {"constraint_tolerance", p.solver.constraint_tolerance},
+            {"max_projection_iterations", p.solver.max_projection_iterations}}},
+          {"gravity", vec_json(p.gravity)}};
+}
+
+const char* knitsim_version() {
+  return KNIT_VERSION;
+}
+
+namespace {
+
+// drops the rows of an existing log.csv whose time is after `time` (a run resumed from an
+// earlier state of the same directory goes on from there)
+void truncate_log_after(const std::filesystem::path& path, double time) {
+  std::ifstream in(path);
+  if (!in) return;
+  std::string line, kept;
+  bool header = true;
+  while (std::getline(in, line)) {
+    if (!header) {
+      const double t = std::strtod(line.c_str(), nullptr);
+      if (t > time * (1 + 1e-12) + 1e-15) break;
+    }
+    header = false;
+    kept += line + "\n";
+  }
+  in.close();
+  write_file_atomic(path.string(), kept);
+}
+
+// bytes of one frame file for this model (positions, velocities, stitches, knit block)
+double frame_bytes(const Model& model) {
+  double b = 64 + 12.0 * model.yarns.size() + 48.0 * model.num_cp();
+  if (model.has_stitches()) b += 8.0 * model.num_seg();
+  if (model.knit) b += 512 + 8.0 * model.num_seg() + 56.0 * model.glues.size();
+  return b;
+}
+
+}  // namespace
+
+void check_start(Simulator& sim, const State& state) {
+  sim.forward(state);
+  const StepData& data = sim.data();
+  const Model& model = sim.model();
+  // yarns that start inside each other (two copies of a yarn, a yarn laid through another)
+  // have no direction to be pushed apart: say so instead of letting the run blow up
+  if (data.contact.present && data.contact.min_distance_ratio < MIN_START_DISTANCE_RATIO) {
+    const ContactPairRecord* worst = nullptr;
+    for (const ContactPairRecord& p : data.contact.pairs)
+      if (!worst || p.d < worst->d) worst = &p;
+    std::ostringstream msg;
+    msg << "the yarns start inside each other";
+    if (worst) {
+      const int yi = model.seg_yarn[worst->seg_i], yj = model.seg_yarn[worst->seg_j];
+      msg << ": segment " << worst->seg_i - model.yarns[yi].seg_begin << " of yarn " << yi
+          << " and segment " << worst->seg_j - model.yarns[yj].seg_begin << " of yarn " << yj
+          << " are " << std::setprecision(3) << worst->d * 2 * model.params.material.radius
+          << " cm apart, less than " << MIN_START_DISTANCE_RATIO * 100
+          << " % of a yarn diameter (are two yarns at the same place?)";
+    }
+    throw std::invalid_argument(msg.str());
+  }
+}
+
 RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
   namespace fs = std::filesystem;
+  const Model& model = sim.model();
+  const double h = model.params.solver.time_step;
+  // everything is checked before anything is written
+  validate_params(model.params);
+  if (!std::isfinite(state.time) || state.time < 0)
+    throw std::invalid_argument("the state's time is " + short_number(state.time) +
+                                " s (expected a finite time >= 0)");
+  if (!state.q.allFinite() || !state.v.allFinite())
+    throw std::invalid_argument("the state holds positions or velocities that are not finite");
+  if (opt.output_every < 1)
+    throw std::invalid_argument("output_every = " + std::to_string(opt.output_every) +
+                                " (expected at least 1 step between written states)");
+  const bool by_end_time = std::isfinite(opt.end_time);
+  const double end_time = by_end_time ? opt.end_time : state.time + opt.duration;
+  if (by_end_time) {
+    if (!(opt.end_time > state.time - 1e-9 * h))
+      throw std::invalid_argument(
+          "the run should end at t = " + short_number(opt.end_time) +
+          " s, but its state is already at t = " + short_number(state.time) + " s");
+    if (opt.end_time - state.time > MAX_DURATION) check_duration(opt.end_time - state.time, h);
+  } else {
+    check_duration(opt.duration, h);
+  }
+  const long long first_step = std::llround(state.time / h);  // global step index
+  const long long total_steps =
+      static_cast<long long>(std::ceil((end_time - state.time) / h - 1e-9));
   const bool write = !opt.out_dir.empty();
   const fs::path dir(opt.out_dir);
   if (write) {
+    // the frames must fit on the disk (a long run with frequent frames can fill it)
+    const double frames = opt.write_frames ? std::floor(total_steps / opt.output_every) + 2 : 2;
+    const double bytes = frames * frame_bytes(model) + 200.0 * frames;
+    std::error_code ec;
+    fs::path probe = dir;
+    while (!probe.empty() && !fs::exists(probe, ec)) probe = probe.parent_path();
+    const fs::space_info space = fs::space(probe.empty() ? fs::path(".") : probe, ec);
+    if (!ec && bytes > static_cast<double>(space.available))
+      throw std::invalid_argument("the run would write about " + format_bytes(bytes) + " (" +
+                                  std::to_string(static_cast<long long>(frames)) +
+                                  " states) into " + opt.out_dir + ", and its disk has " +
+                                  format_bytes(static_cast<double>(space.available)) +
+                                  " free: write fewer states (a larger output interval) or none");
+    if (bytes > 2e9)
+      std::cerr << "knitsim: warning: this run will write about " << format_bytes(bytes) << " into "
+                << opt.out_dir << "\n";
     fs::create_directories(dir);
     if (opt.write_frames) fs::create_directories(dir / "frames");
   }
-  const Model& model = sim.model();
-  const double h = model.params.solver.time_step;
   const StepData& data = sim.data();
 
   // the log grows row by row so long runs can be followed (tail -f DIR/log.csv)
   std::ofstream log;
   if (write) {
-    log.open(dir / "log.csv", std::ios::trunc);
+    if (opt.continue_in_place && fs::exists(dir / "log.csv")) {
+      truncate_log_after(dir / "log.csv", state.time);
+      log.open(dir / "log.csv", std::ios::app);
+    } else {
+      log.open(dir / "log.csv", std::ios::trunc);
+      if (log) log << log_header(sim) << "\n";
+    }
     if (!log) throw std::runtime_error((dir / "log.csv").string() + ": cannot open for writing");
-    log << log_header(sim) << "\n" << std::setprecision(10);
+    log << std::setprecision(10);
   }
 
   RunReport report;
-  const long long total_steps = std::max<long long>(0, std::llround(opt.duration / h));
   const auto t0 = Clock::now();
   auto last_progress = t0;
   auto last_output = t0;
   long long last_output_step = 0;
-  int frame = 0;
+  long long step_index = first_step;
+  int frames_written = 0;
   double contact_pairs_sum = 0;
   long long contact_samples = 0;
   double min_d = std::numeric_limits<double>::infinity();
   std::map<std::string, long long> warnings;
+  std::vector<double> short_steps;
   const bool tty = isatty(fileno(stderr));
   bool printed_progress = false;
 
-  auto write_output = [&]() {
+  auto write_output = [&](bool frame) {
     const double wall = seconds_since(last_output);
     const long long dsteps = report.steps - last_output_step;
     if (write) {
@@ -138,11 +287,15 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
         log << "," << f[0] << "," << f[1] << "," << f[2];
       }
       log << "\n" << std::flush;
-      if (opt.write_frames)
-        write_state_file((dir / "frames" / frame_name(frame)).string(),
+      if (opt.write_frames && frame) {
+        // frames are numbered by the global step (a resumed run goes on with the numbers);
+        // a last state between two output steps takes the next number
+        const long long index = (step_index + opt.output_every - 1) / opt.output_every;
+        write_state_file((dir / "frames" / frame_name(static_cast<int>(index))).string(),
                          make_state_file(model, state));
+        ++frames_written;
+      }
     }
-    ++frame;
     last_output = Clock::now();
     last_output_step = report.steps;
     if (opt.on_output) opt.on_output(data, state);
@@ -153,32 +306,51 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
   if (!initial.converged) {
     report.status = StepStatus::PROJECTION_FAILED;
     report.message = "the initial state cannot be brought onto the constraints (max |C| = " +
-                     std::to_string(initial.max_violation) +
+                     short_number(initial.max_violation) +
                      "): check pins and glue for conflicting targets";
   }
   sim.forward(state);
-  write_output();
+  if (report.status == StepStatus::OK) check_start(sim, state);
+  if (opt.continue_in_place) {
+    // the directory already holds this state's row and frame
+    if (opt.on_output) opt.on_output(data, state);
+  } else {
+    write_output(true);
+  }
   bool stopped_early = false;
-  while (report.status == StepStatus::OK && report.steps < total_steps) {
-    const StepResult res = sim.step(state, h);
+  int signal = 0;
+  while (report.status == StepStatus::OK) {
+    const double hs = next_step_length(state.time, end_time, h);
+    if (hs == 0) break;
+    const StepResult res = sim.step(state, hs);
     if (!res.ok()) {
       report.status = res.status;
       report.message = res.message;
       break;
     }
     ++report.steps;
+    ++step_index;
+    if (hs != h) short_steps.push_back(hs);
     if (data.contact.present) {
       contact_pairs_sum += static_cast<double>(data.contact.point_pairs_in_contact);
       ++contact_samples;
       min_d = std::min(min_d, data.contact.min_distance_ratio);
     }
     for (const std::string& w : data.warnings) ++warnings[w.substr(0, w.find(" ("))];
-    if (report.steps % opt.output_every == 0 || report.steps == total_steps) {
-      write_output();
+    signal = interrupt_signal();
+    const bool last = next_step_length(state.time, end_time, h) == 0;
+    if (step_index % opt.output_every == 0 || last || signal != 0) {
+      write_output(step_index % opt.output_every == 0 || last);
       if (opt.stop_when && opt.stop_when(data, state)) {
         stopped_early = true;
         break;
       }
+    }
+    if (signal != 0) {
+      report.status = StepStatus::INTERRUPTED;
+      report.message = std::string("interrupted by ") + (signal == SIGINT ? "SIGINT" : "SIGTERM") +
+                       " at t = " + short_number(state.time) + " s";
+      break;
     }
     if (opt.progress && seconds_since(last_progress) > (tty ? 0.5 : 15.0) &&
         seconds_since(t0) > 2.0) {
@@ -196,12 +368,15 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
   }
   if (printed_progress && tty) std::cerr << "\n";
   const double wall = seconds_since(t0);
+  const bool failed = report.status != StepStatus::OK && report.status != StepStatus::INTERRUPTED;
 
   // outputs: the final (or last good) state, the log and the summary
   if (write) {
     write_state_file((dir / "final.kstate").string(), make_state_file(model, state));
-    if (report.status != StepStatus::OK)
+    if (failed)
       write_state_file((dir / "last_good.kstate").string(), make_state_file(model, state));
+    else
+      fs::remove(dir / "last_good.kstate");
     log.close();
   }
 
@@ -209,10 +384,27 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
   nlohmann::json s;
   s["status"] = status_word(report.status);
   if (!report.message.empty()) s["message"] = report.message;
+  if (report.status != StepStatus::OK && !opt.resume_command.empty()) {
+    std::string cmd = opt.resume_command;
+    if (const size_t at = cmd.find("{time_left}"); at != std::string::npos) {
+      char left[32];
+      std::snprintf(left, sizeof left, "%.17g", end_time - state.time);
+      cmd.replace(at, 11, left);
+    }
+    s["resume_command"] = cmd;
+  }
+  s["knitsim_version"] = knitsim_version();
   s["stopped_early"] = stopped_early;
   s["steps"] = report.steps;
   s["time_step_s"] = h;
+  s["end_time_s"] = end_time;
   s["sim_time_s"] = state.time;
+  if (!short_steps.empty()) {
+    s["shortened_steps_s"] = short_steps;
+    s["time_note"] =
+        "the duration is not a multiple of the time step: the last steps were "
+        "shortened to end at the time asked";
+  }
   s["wall_time_s"] = wall;
   s["threads"] = std::min<size_t>(
       tbb::this_task_arena::max_concurrency(),
@@ -243,7 +435,8 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
   }
   s["us_per_segment_step"] =
       report.steps > 0 ? 1e6 * wall / (static_cast<double>(report.steps) * model.num_seg()) : 0.0;
-  s["frames_written"] = write && opt.write_frames ? frame : 0;
+  s["frames_written"] = frames_written;
+  s["params"] = params_json(model.params);
   for (const auto& [key, value] : opt.extra.items()) s[key] = value;
   if (opt.on_finish) opt.on_finish(sim, state, s);
   if (write) write_file_atomic((dir / "summary.json").string(), s.dump(2) + "\n");

@@ -12,6 +12,7 @@
 // StepData; the runner evaluates nothing itself. The time step is the model's
 // (params.solver.time_step).
 #include <functional>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -20,10 +21,19 @@
 namespace knit {
 
 struct RunOptions {
-  double duration = 1.0;   ///< s of simulated time to add
+  double duration = 1.0;  ///< s of simulated time to add (unless end_time is set)
+  /// When set (finite): run until the state's time reaches this (s), whatever it starts
+  /// at — a resumed run then takes exactly the steps the uninterrupted one would have.
+  double end_time = std::numeric_limits<double>::quiet_NaN();
   int output_every = 100;  ///< steps between written states (and log rows)
   std::string out_dir;     ///< created if missing; empty: write nothing
-  bool progress = true;    ///< progress line on stderr for runs over ~2 s
+  /// Go on with the run already in out_dir (resumed from one of its states): log.csv is
+  /// appended to (its rows after the start time dropped), frames keep their numbering.
+  bool continue_in_place = false;
+  /// The command that resumes this run from DIR/final.kstate, written into the summary
+  /// of an interrupted or failed run ("" : none).
+  std::string resume_command;
+  bool progress = true;  ///< progress line on stderr for runs over ~2 s
   bool write_frames = true;
   /// Optional early stop, checked at every output step: return true to end the run (ok).
   std::function<bool(const StepData&, const State&)> stop_when;
@@ -44,8 +54,32 @@ struct RunReport {
 };
 
 /// Runs and writes the outputs. On failure `state` holds the last good state, which is
-/// also written to DIR/final.kstate and DIR/last_good.kstate.
+/// also written to DIR/final.kstate and DIR/last_good.kstate. The options and the model's
+/// parameters are checked first (std::invalid_argument naming the bad one, nothing
+/// written). Steps are the model's time step h; when the duration is not a multiple of h
+/// the last one or two steps are shortened (never below h/2) so the run ends at exactly
+/// the time asked, and the summary says so. While an InterruptHandler is installed
+/// (interrupt.hpp), a SIGINT/SIGTERM ends the run after the current step with status
+/// INTERRUPTED: the state is in DIR/final.kstate and the summary holds the command to
+/// resume.
 RunReport run_simulation(Simulator& sim, State& state, const RunOptions& options);
+
+/// Evaluates the forces at `state` and throws std::invalid_argument when yarns start
+/// inside each other (closer than 5 % of a yarn diameter), naming the yarns and segments.
+/// run_simulation calls it; recipes call it before they write anything.
+void check_start(Simulator& sim, const State& state);
+
+/// The step lengths a run takes from `time` to `end_time` with time step h: h while more
+/// than 1.5 h remains, then the rest in one step (≤ h) or two equal ones (≤ 0.75 h). A
+/// step within 1e-9 h of h is exactly h. Returns the next step, or 0 when the end is reached.
+double next_step_length(double time, double end_time, double h);
+
+/// Every parameter of a model as JSON (material, discretisation, solver, gravity), for
+/// the summary's provenance.
+nlohmann::json params_json(const Params& params);
+
+/// The version of knitsim (e.g. "0.4.0"), recorded in every summary.
+const char* knitsim_version();
 
 /// The log.csv header for a simulator's terms and constraint groups.
 std::string log_header(const Simulator& sim);

@@ -43,6 +43,26 @@ std::pair<double, int> max_travel(const Eigen::VectorXd& a, const Eigen::VectorX
   return {std::sqrt(worst), which};
 }
 
+// largest displacement of a control point relative to its neighbour on the same yarn
+// (cm), and which: how much one step deformed the yarn. A yarn moving rigidly (falling,
+// swinging) scores ~0 however fast it goes.
+std::pair<double, int> max_relative_travel(const Model& model, const Eigen::VectorXd& a,
+                                           const Eigen::VectorXd& b) {
+  double worst = 0;
+  int which = 0;
+  for (const YarnInfo& y : model.yarns)
+    for (int k = y.cp_begin + 1; k < y.cp_end; ++k) {
+      const Eigen::Vector3d dk = b.segment<3>(3 * k) - a.segment<3>(3 * k);
+      const Eigen::Vector3d dj = b.segment<3>(3 * (k - 1)) - a.segment<3>(3 * (k - 1));
+      const double d = (dk - dj).squaredNorm();
+      if (d > worst) {
+        worst = d;
+        which = k;
+      }
+    }
+  return {std::sqrt(worst), which};
+}
+
 }  // namespace
 
 const char* status_word(StepStatus status) {
@@ -53,6 +73,8 @@ const char* status_word(StepStatus status) {
       return "unstable";
     case StepStatus::PROJECTION_FAILED:
       return "projection_failed";
+    case StepStatus::INTERRUPTED:
+      return "interrupted";
   }
   return "unknown";
 }
@@ -209,20 +231,25 @@ StepResult Simulator::step(State& state, double h) {
                   " s; try a smaller time step";
     return res;
   }
-  // a control point that moves more than a yarn radius in one step can carry its yarn
-  // through another one between two contact evaluations: the run is no longer trustworthy
-  const auto [travel, cp] = max_travel(state.q, m_qnew);
-  if (travel > m_model.params.material.radius) {
+  // a step that moves a control point more than a yarn diameter relative to its
+  // neighbour has torn the yarn's shape apart (two neighbours each moving a radius the
+  // opposite way): the run is no longer trustworthy. Rigid motion, however fast, is not
+  // instability.
+  const double limit = 2 * m_model.params.material.radius;
+  const auto [deform, cp] = max_relative_travel(m_model, state.q, m_qnew);
+  if (deform > limit) {
     int yarn = 0;
     while (cp >= m_model.yarns[yarn].cp_end) ++yarn;
     std::ostringstream msg;
     msg << "control point " << cp - m_model.yarns[yarn].cp_begin << " of yarn " << yarn << " moved "
-        << travel << " cm in one step at t = " << t_new << " s, more than the yarn radius ("
-        << m_model.params.material.radius << " cm): the run is unstable; try a smaller time step";
+        << deform << " cm relative to its neighbour in one step at t = " << t_new
+        << " s, more than the yarn diameter (" << limit
+        << " cm): the run is unstable; try a smaller time step";
     res.status = StepStatus::NON_FINITE;
     res.message = msg.str();
     return res;
   }
+  const double travel = max_travel(state.q, m_qnew).first;
   state.q.swap(m_qnew);
   state.v.swap(m_vnew);
   state.time = t_new;
@@ -241,6 +268,10 @@ StepResult Simulator::step(State& state, double h) {
     m_data.warnings.push_back("the projection needed more than half its iterations (" +
                               std::to_string(res.projection.iterations) + " of " +
                               std::to_string(max_it) + ")");
+  if (travel > m_model.params.material.radius && m_model.yarns.size() > 1)
+    m_data.warnings.push_back("a yarn moved more than its radius in one step (" +
+                              std::to_string(travel) +
+                              " cm): contacts with other yarns can be missed");
   // the force records at the result (the next step's first evaluation); the projection
   // ended by evaluating C at exactly these positions and time, so max |C| is known
   forward(state, res.projection.max_violation);

@@ -23,7 +23,9 @@
 
 namespace knit {
 
-enum class StepStatus { OK, NON_FINITE, PROJECTION_FAILED };
+/// How a step (or a run) ended. INTERRUPTED is a run's status only: a signal asked it to
+/// stop after a step that went well.
+enum class StepStatus { OK, NON_FINITE, PROJECTION_FAILED, INTERRUPTED };
 
 struct StepResult {
   StepStatus status = StepStatus::OK;
@@ -32,7 +34,8 @@ struct StepResult {
   bool ok() const { return status == StepStatus::OK; }
 };
 
-/// The word a summary uses for a status: "ok", "unstable", "projection_failed".
+/// The word a summary uses for a status: "ok", "unstable", "projection_failed",
+/// "interrupted".
 const char* status_word(StepStatus status);
 
 class Simulator {

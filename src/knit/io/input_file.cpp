@@ -1,0 +1,85 @@
+#include "knit/io/input_file.hpp"
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+#include <system_error>
+
+namespace knit {
+
+std::string format_bytes(double bytes) {
+  char buf[32];
+  if (bytes < 1024)
+    std::snprintf(buf, sizeof buf, "%.0f B", bytes);
+  else if (bytes < 1024.0 * 1024)
+    std::snprintf(buf, sizeof buf, "%.1f kB", bytes / 1024);
+  else if (bytes < 1024.0 * 1024 * 1024)
+    std::snprintf(buf, sizeof buf, "%.1f MB", bytes / (1024.0 * 1024));
+  else
+    std::snprintf(buf, sizeof buf, "%.1f GB", bytes / (1024.0 * 1024 * 1024));
+  return buf;
+}
+
+double available_memory_bytes() {
+  double avail = 0;
+  {
+    std::ifstream in("/proc/meminfo");
+    std::string key;
+    double value;
+    std::string unit;
+    while (in >> key >> value) {
+      std::getline(in, unit);
+      if (key == "MemAvailable:") {
+        avail = value * 1024;
+        break;
+      }
+    }
+  }
+  // a container's limit (cgroup v2, then v1)
+  for (const char* path :
+       {"/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory/memory.limit_in_bytes"}) {
+    std::ifstream in(path);
+    std::string text;
+    if (!(in >> text) || text == "max") continue;
+    const double limit = std::strtod(text.c_str(), nullptr);
+    if (limit > 0 && limit < 1e18 && (avail == 0 || limit < avail)) avail = limit;
+  }
+  return avail;
+}
+
+void check_input_path(const std::string& path, const char* what) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::file_status st = fs::status(path, ec);
+  if (ec || !fs::exists(st))
+    throw std::runtime_error(path + ": cannot open " + what + " (no such file)");
+  if (fs::is_directory(st))
+    throw std::runtime_error(path + ": is a directory; expected a " + std::string(what));
+  if (!fs::is_regular_file(st))
+    throw std::runtime_error(path + ": is not a regular file (a device, FIFO or socket); " +
+                             "expected a " + what);
+}
+
+std::string read_input_file(const std::string& path, std::size_t max_bytes, const char* what) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  check_input_path(path, what);
+  const auto size = fs::file_size(path, ec);
+  if (ec) throw std::runtime_error(path + ": cannot read " + what + ": " + ec.message());
+  if (size > max_bytes)
+    throw std::runtime_error(path + ": " + format_bytes(static_cast<double>(size)) +
+                             ", more than the " + format_bytes(static_cast<double>(max_bytes)) +
+                             " a " + what + " may be");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error(path + ": cannot open " + what + " for reading");
+  std::string data(static_cast<std::size_t>(size), '\0');
+  in.read(data.data(), static_cast<std::streamsize>(size));
+  if (in.gcount() != static_cast<std::streamsize>(size) || in.bad())
+    throw std::runtime_error(path + ": read failed (the " + what + " changed while being read?)");
+  return data;
+}
+
+}  // namespace knit
