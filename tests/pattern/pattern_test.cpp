@@ -40,6 +40,16 @@ TEST(Pattern, ChartErrorsNameSourceLineAndColumn) {
   EXPECT_NE(error_of("").find("empty chart"), std::string::npos);
 }
 
+TEST(Pattern, UnprintableCharactersAreEscapedInErrors) {
+  // a NUL, a control character or a UTF-8 byte is shown as \xNN, never raw
+  const std::string nul = error_of(std::string("kp\nk\0p\n", 7));
+  EXPECT_NE(nul.find("swatch.chart:2:2: unknown stitch '\\x00'"), std::string::npos) << nul;
+  EXPECT_EQ(nul.find('\0'), std::string::npos);
+  const std::string bom = error_of("\xef\xbb\xbfkp\n");
+  EXPECT_NE(bom.find("swatch.chart:1:1: unknown stitch '\\xef'"), std::string::npos) << bom;
+  EXPECT_NE(error_of("k\x7f\n").find("'\\x7f'"), std::string::npos);
+}
+
 TEST(Pattern, TileRepeatsTheChart) {
   const Pattern t = tile(parse_chart("kp\npk\nkk\n", "t"), 5, 5);
   ASSERT_EQ(t.num_rows(), 5);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cstdio>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
@@ -14,6 +15,16 @@ std::string lower(std::string_view s) {
   std::string out(s);
   for (char& ch : out) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
   return out;
+}
+
+// a character for a message: itself when printable ASCII, else \xNN, so that a NUL, a
+// control character or a piece of a UTF-8 sequence does not land raw in the message
+std::string printable(char ch) {
+  const auto u = static_cast<unsigned char>(ch);
+  if (u >= 0x20 && u < 0x7f) return std::string(1, ch);
+  char buf[8];
+  std::snprintf(buf, sizeof buf, "\\x%02x", static_cast<unsigned>(u));
+  return buf;
 }
 
 }  // namespace
@@ -38,8 +49,8 @@ Pattern parse_chart(std::string_view text, const std::string& source_name) {
       const char lc = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
       if (lc != 'k' && lc != 'p') {
         std::ostringstream msg;
-        msg << source_name << ":" << line_no << ":" << (i + 1) << ": unknown stitch '" << ch
-            << "' (expected 'k' for knit or 'p' for purl, '#' for a comment)";
+        msg << source_name << ":" << line_no << ":" << (i + 1) << ": unknown stitch '"
+            << printable(ch) << "' (expected 'k' for knit or 'p' for purl, '#' for a comment)";
         throw std::invalid_argument(msg.str());
       }
       stitches.push_back(lc);
