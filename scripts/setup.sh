@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs the Debian packages knitsim needs (only those missing) and builds it in
 # Release into build/. Idempotent and quiet when everything is already there.
+# Usage: scripts/setup.sh [--install-only]   (--install-only: the packages, no build)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -11,6 +12,7 @@ packages=(
   ffmpeg gnuplot-nox clang-format
 )
 bash scripts/apt-install.sh --why setup "${packages[@]}"
+[ "${1:-}" != --install-only ] || exit 0
 
 build_dir=${KNIT_BUILD_DIR:-build}
 jobs=${KNIT_JOBS:-$(nproc)}
