@@ -10,7 +10,7 @@ cd "$(dirname "$0")/.."
 seconds=${1:-60}
 build_dir=${KNIT_FUZZ_BUILD_DIR:-build-fuzz}
 jobs=${KNIT_JOBS:-1}
-targets=(fuzz_yarns fuzz_bcc fuzz_obj fuzz_kstate)
+targets=(fuzz_yarns fuzz_bcc fuzz_obj fuzz_kstate fuzz_scene fuzz_chart)
 
 scripts/setup.sh --install-only
 # libclang-rt-dev is the runtime (libclang_rt.fuzzer) of the default clang (14 on Debian 12)
@@ -41,12 +41,22 @@ for t in "${targets[@]}"; do
   corpus="$build_dir/corpus/$t"
   artifacts="$build_dir/artifacts/$t"
   mkdir -p "$corpus" "$artifacts"
+  # the largest input each reader is fed: whole yarn files, scenes (a yarn's points are
+  # listed in them), and charts (a few lines)
   max_len=131072
   case $t in
     fuzz_yarns) cp -n tests/data/yarns/*.yarns "$corpus"/ ;;
     fuzz_bcc) cp -n fuzz/seeds/bcc/* "$corpus"/ ;;
     fuzz_obj) cp -n fuzz/seeds/obj/* "$corpus"/ ;;
     fuzz_kstate) cp -n fuzz/seeds/kstate/* "$corpus"/ ;;
+    fuzz_scene)
+      cp -n fuzz/seeds/scene/* "$corpus"/
+      max_len=65536
+      ;;
+    fuzz_chart)
+      cp -n fuzz/seeds/chart/* "$corpus"/
+      max_len=2048
+      ;;
   esac
   echo "fuzz: $t for ${seconds}s"
   log="$build_dir/$t.log"
