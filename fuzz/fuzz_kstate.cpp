@@ -12,9 +12,17 @@
 #include "knit/io/state_file.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-  static const std::string path = (std::filesystem::temp_directory_path() /
-                                   ("knit-fuzz-" + std::to_string(getpid()) + ".kstate"))
-                                      .string();
+  // the input's file, removed when the fuzzer exits
+  static const struct TempFile {
+    std::string path = (std::filesystem::temp_directory_path() /
+                        ("knit-fuzz-" + std::to_string(getpid()) + ".kstate"))
+                           .string();
+    ~TempFile() {
+      std::error_code ec;
+      std::filesystem::remove(path, ec);
+    }
+  } temp;
+  const std::string& path = temp.path;
   {
     std::ofstream out(path, std::ios::binary | std::ios::trunc);
     out.write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(size));

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs the Debian packages knitsim needs (only those missing) and builds it in
 # Release into build/. Idempotent and quiet when everything is already there.
+# Usage: scripts/setup.sh [--install-only]   (--install-only: the packages, no build)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -10,17 +11,8 @@ packages=(
   libpng-dev zlib1g-dev libstb-dev libgtest-dev libgmock-dev libbenchmark-dev
   ffmpeg gnuplot-nox clang-format
 )
-missing=()
-for p in "${packages[@]}"; do
-  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
-done
-if [ ${#missing[@]} -gt 0 ]; then
-  echo "setup: installing ${missing[*]}"
-  sudo_cmd=()
-  [ "$(id -u)" -eq 0 ] || sudo_cmd=(sudo)
-  "${sudo_cmd[@]}" apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
-fi
+bash scripts/apt-install.sh --why setup "${packages[@]}"
+[ "${1:-}" != --install-only ] || exit 0
 
 build_dir=${KNIT_BUILD_DIR:-build}
 jobs=${KNIT_JOBS:-$(nproc)}

@@ -1,14 +1,18 @@
-// Inputs found by the libFuzzer targets in fuzz/ (scripts/fuzz.sh). Each must be rejected
-// with a clean exception naming the file, never crash.
+// Inputs found by the libFuzzer targets in fuzz/ (scripts/fuzz.sh) and hand-made hostile
+// inputs, in tests/data/io/fuzz/. Each must be rejected with a clean exception naming the
+// file, never crash. Every reader has at least one.
 #include <gtest/gtest.h>
 
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <sstream>
 
 #include "knit/io/import.hpp"
 #include "knit/io/state_file.hpp"
+#include "knit/pattern/pattern.hpp"
+#include "knit/scene/scene.hpp"
 
 namespace knit {
 namespace {
@@ -17,16 +21,22 @@ namespace fs = std::filesystem;
 
 TEST(IoFuzzRegression, EveryKeptInputFailsCleanly) {
   const fs::path dir = fs::path(KNIT_TEST_DATA) / "io" / "fuzz";
-  int count = 0;
+  // extension → reader
+  std::map<std::string, int> count = {{".yarns", 0},  {".bcc", 0},  {".obj", 0},
+                                      {".kstate", 0}, {".json", 0}, {".chart", 0}};
   for (const auto& e : fs::directory_iterator(dir)) {
     const std::string path = e.path().string();
     const std::string ext = e.path().extension().string();
-    if (ext != ".yarns" && ext != ".bcc" && ext != ".obj" && ext != ".kstate") continue;
-    ++count;
+    if (!count.count(ext)) continue;
+    ++count[ext];
     std::string message;
     try {
       if (ext == ".kstate") {
         read_state_file(path);
+      } else if (ext == ".json") {
+        load_scene(path);
+      } else if (ext == ".chart") {
+        load_pattern(path);
       } else {
         import_yarns(path);
       }
@@ -37,7 +47,12 @@ TEST(IoFuzzRegression, EveryKeptInputFailsCleanly) {
     EXPECT_FALSE(message.empty()) << path << " was accepted";
     EXPECT_NE(message.find(e.path().filename().string()), std::string::npos) << message;
   }
-  RecordProperty("inputs", count);
+  int total = 0;
+  for (const auto& [ext, n] : count) {
+    EXPECT_GT(n, 0) << "no " << ext << " input in " << dir;
+    total += n;
+  }
+  RecordProperty("inputs", total);
 }
 
 }  // namespace

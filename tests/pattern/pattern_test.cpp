@@ -40,6 +40,19 @@ TEST(Pattern, ChartErrorsNameSourceLineAndColumn) {
   EXPECT_NE(error_of("").find("empty chart"), std::string::npos);
 }
 
+TEST(Pattern, UnprintableCharactersAreEscapedInErrors) {
+  // a NUL, a control character or a UTF-8 byte is shown by its value, never raw
+  const std::string nul = error_of(std::string("kp\nk\0p\n", 7));
+  EXPECT_NE(nul.find("swatch.chart:2:2: unknown stitch byte 0x00"), std::string::npos) << nul;
+  EXPECT_EQ(nul.find('\0'), std::string::npos);
+  const std::string utf8 = error_of("k\xc3\xa9p\n");
+  EXPECT_NE(utf8.find("swatch.chart:1:2: unknown stitch byte 0xC3 (not ASCII"), std::string::npos)
+      << utf8;
+  EXPECT_NE(error_of("k\x7f\n").find("byte 0x7F"), std::string::npos);
+  // a UTF-8 byte-order mark at the start is not part of the chart
+  EXPECT_EQ(parse_chart("\xef\xbb\xbfkp\n", "bom.chart").num_cols(), 2);
+}
+
 TEST(Pattern, TileRepeatsTheChart) {
   const Pattern t = tile(parse_chart("kp\npk\nkk\n", "t"), 5, 5);
   ASSERT_EQ(t.num_rows(), 5);

@@ -145,9 +145,11 @@ std::string obj_text(const StateFile& state, int per_segment) {
       append_float(out, p(2, k));
       out += '\n';
     }
-    out += 'l';
-    for (Eigen::Index k = 0; k < p.cols(); ++k) out += ' ' + std::to_string(base + k);
-    out += '\n';
+    // one two-point line element per span: Blender 3.4's OBJ importer (Debian 12's) keeps
+    // only the first span of a longer `l`. Blender makes each object one chain of edges,
+    // and our reader joins elements that continue one another back into one yarn.
+    for (Eigen::Index k = 0; k + 1 < p.cols(); ++k)
+      out += "l " + std::to_string(base + k) + ' ' + std::to_string(base + k + 1) + '\n';
     base += p.cols();
   }
   return out;

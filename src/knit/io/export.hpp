@@ -5,7 +5,7 @@
 //   USD (.usda text)  exact curves: one BasisCurves prim per yarn (cubic, bspline,
 //                     nonperiodic), control points as `points`, widths = 2r; a sequence of
 //                     states becomes one file with time samples. Z up, 1 unit = 1 cm.
-//   OBJ               polylines (`v` and `l`), splines sampled densely.
+//   OBJ               polylines (`v`, and `l` for each span), splines sampled densely.
 //   BCC               Cem Yuksel's binary curve collection, PL (polyline) curves.
 //   PLY               points and edges (binary little-endian or ascii), e.g. for ParaView.
 #include <string>
