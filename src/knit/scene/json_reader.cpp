@@ -125,6 +125,14 @@ int JsonReader::integer(int min_value) const {
   return static_cast<int>(x);
 }
 
+int JsonReader::integer(int min_value, int max_value) const {
+  const int x = integer(min_value);
+  if (x > max_value)
+    fail("expected an integer from " + std::to_string(min_value) + " to " +
+         std::to_string(max_value) + ", got " + std::to_string(x));
+  return x;
+}
+
 bool JsonReader::boolean() const {
   if (!m_value.is_boolean()) fail("expected true or false, got " + describe(m_value));
   return m_value.get<bool>();

@@ -38,6 +38,8 @@ class JsonReader {
   /// A finite number > 0 (or ≥ 0 when `allow_zero`).
   double positive(bool allow_zero = false) const;
   int integer(int min_value) const;
+  /// An integer in [min_value, max_value].
+  int integer(int min_value, int max_value) const;
   bool boolean() const;
   std::string string() const;
   Eigen::Vector3d vec3() const;

@@ -13,6 +13,13 @@
 namespace knit {
 
 namespace {
+// segments one yarn described in a scene may have, and all of them together (the paper's
+// longest scarf has 64k; a relaxed knit placed with "knits" is not counted)
+constexpr int MAX_YARN_SEGMENTS = 200'000;
+constexpr int MAX_SCENE_YARN_SEGMENTS = 1'000'000;
+}  // namespace
+
+namespace {
 
 // control points of a straight yarn from `a` to `b` (the curve starts at a and ends at b)
 Eigen::Matrix3Xd line_points(const Eigen::Vector3d& a, const Eigen::Vector3d& b, int segments) {
@@ -76,14 +83,14 @@ Eigen::Matrix3Xd parse_yarn(const JsonReader& y) {
   if (y.has("polyline")) {
     const Eigen::Matrix3Xd poly = read_points(y.at("polyline"), 2);
     if (!(polyline_length(poly) > 0)) y.at("polyline").fail("polyline has zero length");
-    return fit_polyline(poly, y.at("segments").integer(1));
+    return fit_polyline(poly, y.at("segments").integer(1, MAX_YARN_SEGMENTS));
   }
   if (y.has("line")) {
     const JsonReader l = y.at("line");
     l.allow_keys({"from", "to", "segments"});
     const Eigen::Vector3d a = l.at("from").vec3(), b = l.at("to").vec3();
     if ((b - a).norm() <= 0) l.fail("\"from\" and \"to\" must differ");
-    return line_points(a, b, l.at("segments").integer(1));
+    return line_points(a, b, l.at("segments").integer(1, MAX_YARN_SEGMENTS));
   }
   if (y.has("helix")) {
     const JsonReader h = y.at("helix");
@@ -92,7 +99,7 @@ Eigen::Matrix3Xd parse_yarn(const JsonReader& y) {
     const double radius = h.at("radius").positive();
     const double pitch = h.at("pitch").number();
     const double turns = h.at("turns").positive();
-    const int segs = h.at("segments").integer(1);
+    const int segs = h.at("segments").integer(1, MAX_YARN_SEGMENTS);
     const int n = 16 * segs + 1;
     Eigen::Matrix3Xd poly(3, n);
     for (int k = 0; k < n; ++k) {
@@ -108,7 +115,7 @@ Eigen::Matrix3Xd parse_yarn(const JsonReader& y) {
   const double radius = c.at("radius").positive();
   const double degrees = c.has("degrees") ? c.at("degrees").positive() : 330.0;
   if (degrees > 360) c.at("degrees").fail("expected at most 360 degrees");
-  const int segs = c.at("segments").integer(1);
+  const int segs = c.at("segments").integer(1, MAX_YARN_SEGMENTS);
   const int n = 16 * segs + 1;
   Eigen::Matrix3Xd poly(3, n);
   for (int k = 0; k < n; ++k) {
@@ -395,6 +402,10 @@ Scene parse_scene(const nlohmann::json& doc, const std::string& source, const Pa
       } else {
         builder.add_yarn(parse_yarn(y));
       }
+      if (builder.num_segments() > MAX_SCENE_YARN_SEGMENTS)
+        y.fail("the scene's yarns have " + std::to_string(builder.num_segments()) +
+               " segments so far, more than a scene may have (" +
+               std::to_string(MAX_SCENE_YARN_SEGMENTS) + ")");
     }
   }
   stitch.assign(builder.num_segments(), StitchCoord{});
