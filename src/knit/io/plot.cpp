@@ -1,6 +1,7 @@
 #include "knit/io/plot.hpp"
 
 #include <stdlib.h>
+#include <cctype>
 
 #include <charconv>
 #include <cmath>
@@ -70,8 +71,15 @@ void write_data(const CsvTable& t, const std::string& path) {
 // runs `gnuplot script`; throws with gnuplot's own messages on failure
 void run_gnuplot(const std::string& gnuplot, const std::string& script, const std::string& what) {
   std::string messages;
-  if (run_process({gnuplot, script}, messages) != 0)
-    throw std::runtime_error(what + ": gnuplot failed: " + messages);
+  const int rc = run_process({gnuplot, script}, messages);
+  if (rc == 0) return;
+  while (!messages.empty() && std::isspace(static_cast<unsigned char>(messages.back())))
+    messages.pop_back();
+  if (messages.size() > 1000) messages = messages.substr(0, 1000) + "…";
+  const std::string status = rc > 128 ? "killed by signal " + std::to_string(rc - 128)
+                                      : "exit status " + std::to_string(rc);
+  throw std::runtime_error(what + ": gnuplot failed (" + status + ")" +
+                           (messages.empty() ? std::string(", with no message") : ": " + messages));
 }
 
 // a temporary working folder removed on scope exit
