@@ -341,13 +341,25 @@ TEST(ContactTerm, DampingOnlyRemovesEnergy) {
   }
 }
 
+// Contact energy per unit length of a straight yarn lying parallel to an infinite straight
+// yarn at distance s < 2r (MODEL.md §3 with ℓ dt = arclength): k_contact ∫ g(x) dx with
+// g(x) = f(√(s² + x²)/2r), in closed form (see tests/energy/known_energies_test.cpp)
+//   G₀(s) = 2 [4r²/s · atan(x_m/s) + (s² x_m + x_m³/3)/4r² − 2 x_m],  x_m = √(4r² − s²).
+double parallel_contact_energy_per_length(double k_contact, double r, double s) {
+  const double four_r2 = 4 * r * r;
+  if (s * s >= four_r2) return 0;
+  const double xm = std::sqrt(four_r2 - s * s);
+  return k_contact * 2 *
+         (four_r2 / s * std::atan(xm / s) + (s * s * xm + xm * xm * xm / 3) / four_r2 - 2 * xm);
+}
+
 TEST(ContactTerm, PushedYarnsNeverComeCloserThanHalfTheContactDistance) {
   // a free yarn pressed by 5000 dyn per cm of yarn (≈ 5 g-force per cm, about 850 times its
   // weight) into the groove between two pinned, touching parallel yarns (on a single
   // pinned yarn it would slide off sideways), from rest at d = 1.05; symplectic Euler with
   // only the contact term (energy + damping) and the push
   const Params p;
-  const double two_r = 2 * p.material.radius;
+  const double r = p.material.radius, two_r = 2 * r;
   const double half_gap = 0.51 * two_r;  // bottom yarns 1.02·2r apart (centre to centre)
   const double height = std::sqrt(std::pow(1.05 * two_r, 2) - half_gap * half_gap);
   const double h = 0.3;
@@ -367,12 +379,34 @@ TEST(ContactTerm, PushedYarnsNeverComeCloserThanHalfTheContactDistance) {
   const int free_dofs = static_cast<int>(q.size()) - first_free;
   const double push = 5000;  // dyn/cm
   ContactTerm term(model);
+  // The first turning point, from energy alone: released at rest out of contact, the yarn
+  // (a rigid rod: the push and the support are uniform along it) stops where the push's
+  // work per unit length equals the contact energy it has stored against the two bottom
+  // yarns, p (z₀ − z) = 2 G₀(√(a² + z²)) with a = half_gap (contact damping, k_dn = 0.03,
+  // takes a negligible share). Solved by bisection: d = 0.7104. With a 16× stiffer contact
+  // it would be 0.936.
+  auto stored_minus_work = [&](double z) {
+    return 2 * parallel_contact_energy_per_length(p.material.k_contact, r,
+                                                  std::hypot(half_gap, z)) -
+           push * (height - z);
+  };
+  double lo = 0.01, hi = std::sqrt(two_r * two_r - half_gap * half_gap);  // d = 1 at hi
+  for (int it = 0; it < 100; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    if (stored_minus_work(mid) > 0)
+      lo = mid;  // still pressed deeper than the push's work can pay for: turns higher up
+    else
+      hi = mid;
+  }
+  const double turning_d = std::hypot(half_gap, 0.5 * (lo + hi)) / two_r;
+  double first_min_d = std::numeric_limits<double>::infinity();
   double min_d = std::numeric_limits<double>::infinity();
   const double dt = 1e-5;
   for (int step = 0; step < 3000; ++step) {
     Eigen::VectorXd f = Eigen::VectorXd::Zero(q.size());
     term.add_force(model, q, v, f);
     min_d = std::min(min_d, term.last_stats().min_distance_ratio);
+    if (step < 1500) first_min_d = min_d;  // the first swing in and out (MEASURED below)
     for (int k = first_free; k < q.size(); ++k) {
       const double m = model.mass[k / 3];
       const double fk = f[k] + (k % 3 == 2 ? -push * m / p.material.density : 0.0);
@@ -381,8 +415,13 @@ TEST(ContactTerm, PushedYarnsNeverComeCloserThanHalfTheContactDistance) {
     q.tail(free_dofs) += dt * v.tail(free_dofs);
     ASSERT_TRUE(q.allFinite()) << "step " << step;
   }
-  EXPECT_LT(min_d, 0.9) << "the push should press the yarns well into contact";
-  EXPECT_GE(min_d, 0.5);
+  // measured: the first swing turns at d = 0.7076 (step ≈ 900; by step 1500 the yarn is
+  // back at d = 0.83), 0.4 % inside the prediction (the yarn tilts a little, and the
+  // midpoint rule is 0.1 % off the integral); allowed ±0.015
+  EXPECT_NEAR(first_min_d, turning_d, 0.015) << "predicted d = " << turning_d;
+  // it keeps bouncing with next to no damping and rocks a little, so later swings reach
+  // slightly deeper: measured min over 3000 steps 0.7021; allowed down to 0.68
+  EXPECT_GE(min_d, 0.68);
   // the free yarn still lies in the groove, above the pinned ones
   for (int k = model.yarns[2].cp_begin + 1; k + 1 < model.yarns[2].cp_end; ++k) {
     EXPECT_GT(q[3 * k + 2], 0.0) << "control point " << k;

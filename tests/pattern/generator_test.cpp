@@ -28,7 +28,12 @@ TEST(Generator, SegmentCountsAndStitchCoordinates) {
     const int rows = 5, cols = 7, k = 8;
     const GeneratedKnit g = knit("rib2x2", rows, cols, round);
     const int turns = round ? 0 : rows - 1;
-    EXPECT_EQ(g.segments_per_turn, round ? 0 : g.segments_per_turn);
+    // a turn is a half circle joining rows row_height apart, π/2 · 0.742 = 1.17 cm of yarn,
+    // laid with segments about as long as a stitch's (4.09 cm / 8 = 0.51 cm): 2 segments
+    EXPECT_EQ(g.segments_per_turn, round ? 0 : 2);
+    int turn_segments = 0;
+    for (const YarnPiece p : g.piece) turn_segments += p == YarnPiece::TURN;
+    EXPECT_EQ(turn_segments, turns * g.segments_per_turn);
     ASSERT_GT(g.segments_per_tail, 0);
     // k per stitch, plus each row turn of a flat piece, plus the two tails
     const int expected = rows * cols * k + turns * g.segments_per_turn + 2 * g.segments_per_tail;
