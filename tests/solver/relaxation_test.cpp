@@ -160,22 +160,24 @@ EdgeRoll central_edge_roll(const Model& m, const Eigen::VectorXd& q, const Fabri
 }
 
 // The paper's result (MODEL.md §6), in small: the same loop and parameters, differing only
-// in which stitches are knit or purl, relax into different shapes. Three 8 × 8 swatches
-// relaxed by the relax_knit recipe with its defaults for 0.1 s (1180 steps; the 42 × 32
-// samples of README "Results" ran 4 s). Measured (Release, this machine), generated → after
-// 0.1 s:
-//   course length along the fabric: stockinette 8.015 → 7.878 cm, 2×2 rib 8.057 → 7.508
-//     (rib/stockinette 1.005 → 0.953);
-//   wale length along the fabric: stockinette 5.938 → 5.429 cm, garter 5.967 → 4.892
-//     (garter/stockinette 1.005 → 0.901);
-//   stockinette's edges (central halves): left −0.026 → −0.173 cm, right −0.026 → −0.170
-//     (to the back), bottom 0.000 → +0.057, top 0.000 → +0.060 (to the front).
+// in which stitches are knit or purl, relax into different shapes. Three swatches of 6 rows
+// × 8 stitches (two 2×2 rib repeats) relaxed by the relax_knit recipe with its defaults for
+// 0.1 s (1180 steps; the 42 × 32 samples of README "Results" ran 4 s). Measured (Release),
+// generated → after 0.1 s:
+//   course length along the fabric: stockinette 8.015 → 7.898 cm, 2×2 rib 8.057 → 7.588
+//     (rib/stockinette 1.005 → 0.961);
+//   wale length along the fabric: stockinette 4.453 → 4.063 cm, garter 4.468 → 3.666
+//     (garter/stockinette 1.003 → 0.902);
+//   stockinette's edges (central halves): left −0.026 → −0.170 cm, right −0.026 → −0.161
+//     (to the back), bottom 0.000 → +0.027, top 0.000 → +0.028 (to the front).
 // The orderings are not in the generated knits: the relaxation makes them. Thresholds sit
-// about halfway between the generated and the measured values.
+// about halfway between the generated and the measured values. (8 × 8 swatches show the
+// same more strongly, top and bottom +0.057 and +0.060, at twice the cost: 150 s under
+// AddressSanitizer.)
 TEST(Relaxation, SmallSwatchesTakeThePapersShapes) {
   auto relaxed = [](const char* pattern) {
     RelaxKnitOptions o;
-    o.knit.rows = 8;
+    o.knit.rows = 6;
     o.knit.cols = 8;
     o.run.max_time = 0.1;
     o.run.progress = false;
@@ -202,18 +204,18 @@ TEST(Relaxation, SmallSwatchesTakeThePapersShapes) {
   const FabricShape st0 = generated(st), garter0 = generated(garter), rib0 = generated(rib);
   EXPECT_GT(rib0.course_length_cm, 0.99 * st0.course_length_cm);
   EXPECT_GT(garter0.wale_length_cm, 0.99 * st0.wale_length_cm);
-  // 2×2 rib draws in across: measured 0.953 of stockinette's width
-  EXPECT_LT(rib_shape.course_length_cm, 0.98 * st_shape.course_length_cm)
+  // 2×2 rib draws in across: measured 0.961 of stockinette's width
+  EXPECT_LT(rib_shape.course_length_cm, 0.983 * st_shape.course_length_cm)
       << "rib " << rib_shape.course_length_cm << " cm, stockinette " << st_shape.course_length_cm;
-  // garter draws in along the wale: measured 0.901 of stockinette's height
+  // garter draws in along the wale: measured 0.902 of stockinette's height
   EXPECT_LT(garter_shape.wale_length_cm, 0.95 * st_shape.wale_length_cm)
       << "garter " << garter_shape.wale_length_cm << " cm, stockinette " << st_shape.wale_length_cm;
   // stockinette's side edges roll to the back, its top and bottom edges to the front
   const EdgeRoll roll = central_edge_roll(st.model, st.state.q, st_shape);
-  EXPECT_LT(roll.left, -0.1) << "left edge, cm toward the front";
-  EXPECT_LT(roll.right, -0.1) << "right edge, cm toward the front";
-  EXPECT_GT(roll.bottom, 0.03) << "bottom edge, cm toward the front";
-  EXPECT_GT(roll.top, 0.03) << "top edge, cm toward the front";
+  EXPECT_LT(roll.left, -0.09) << "left edge, cm toward the front";
+  EXPECT_LT(roll.right, -0.09) << "right edge, cm toward the front";
+  EXPECT_GT(roll.bottom, 0.013) << "bottom edge, cm toward the front";
+  EXPECT_GT(roll.top, 0.013) << "top edge, cm toward the front";
 }
 
 }  // namespace
