@@ -52,7 +52,7 @@ void register_simulate(CLI::App& app) {
             " yarn(s) and " + std::to_string(f.num_cp()) + " control points, but " + opts->scene +
             " has " + std::to_string(counts.size()) + " and " +
             std::to_string(scene.model.num_cp()) + ": it is not a state of this scene");
-      if (f.state.time >= scene.duration - 1e-9 * scene.model.params.solver.time_step)
+      if (f.state.time >= scene.duration - 1e-6 * scene.model.params.solver.time_step)
         throw std::invalid_argument("--resume " + opts->resume +
                                     ": the state is at t = " + knit::short_number(f.state.time) +
                                     " s, already at the scene's end (" +

@@ -56,7 +56,7 @@ void check_duration(double duration, double time_step) {
     throw std::invalid_argument("duration = " + short_number(duration) +
                                 " s is outside its working range (0, " +
                                 short_number(MAX_DURATION) + "] s");
-  if (duration < time_step * (1 - 1e-9))
+  if (duration < time_step * (1 - 1e-6))
     throw std::invalid_argument("duration = " + short_number(duration) +
                                 " s is shorter than one time step (" + short_number(time_step) +
                                 " s)");

@@ -95,10 +95,13 @@ constexpr double MIN_START_DISTANCE_RATIO = 0.05;
 }  // namespace
 
 double next_step_length(double time, double end_time, double h) {
+  // the time is a sum of steps: after 10⁴–10⁶ of them its rounding error reaches 1e-12 s,
+  // so "exactly h left" is judged to a millionth of a step
+  constexpr double SNAP = 1e-6;
   const double left = end_time - time;
-  if (left <= 1e-9 * h) return 0;
+  if (left <= SNAP * h) return 0;
   if (left > 1.5 * h) return h;
-  if (std::abs(left - h) <= 1e-9 * h) return h;
+  if (std::abs(left - h) <= SNAP * h) return h;
   if (left <= h) return left;
   return 0.5 * left;  // (h, 1.5 h]: two steps in (h/2, 3h/4] rather than one of h and a sliver
 }
@@ -204,7 +207,7 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
   const bool by_end_time = std::isfinite(opt.end_time);
   const double end_time = by_end_time ? opt.end_time : state.time + opt.duration;
   if (by_end_time) {
-    if (!(opt.end_time > state.time - 1e-9 * h))
+    if (!(opt.end_time > state.time - 1e-6 * h))
       throw std::invalid_argument(
           "the run should end at t = " + short_number(opt.end_time) +
           " s, but its state is already at t = " + short_number(state.time) + " s");
@@ -214,7 +217,7 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
   }
   const long long first_step = std::llround(state.time / h);  // global step index
   const long long total_steps =
-      static_cast<long long>(std::ceil((end_time - state.time) / h - 1e-9));
+      static_cast<long long>(std::ceil((end_time - state.time) / h - 1e-6));
   const bool write = !opt.out_dir.empty();
   const fs::path dir(opt.out_dir);
   if (write) {

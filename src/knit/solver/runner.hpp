@@ -70,8 +70,9 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& options
 void check_start(Simulator& sim, const State& state);
 
 /// The step lengths a run takes from `time` to `end_time` with time step h: h while more
-/// than 1.5 h remains, then the rest in one step (≤ h) or two equal ones (≤ 0.75 h). A
-/// step within 1e-9 h of h is exactly h. Returns the next step, or 0 when the end is reached.
+/// than 1.5 h remains, then the rest in one step (≤ h) or two equal ones (≤ 0.75 h). What
+/// is left within 1e-6 h of h is one step of exactly h, and within 1e-6 h of 0 nothing
+/// (the rounding of a time summed over many steps). Returns the next step, or 0 at the end.
 double next_step_length(double time, double end_time, double h);
 
 /// Every parameter of a model as JSON (material, discretisation, solver, gravity), for
