@@ -1,7 +1,7 @@
-// libFuzzer target: the scene reader, as load_scene reads a file: parse_json_file on a copy
-// of the input, then parse_scene. Expected rejections are std::invalid_argument and
-// std::runtime_error (InputError among them); any other exception, a crash, a sanitizer
-// report or a hang is a bug.
+// libFuzzer target: the scene reader, as load_scene reads a file: parse_json_text (what
+// parse_json_file does after its file checks) on the input, then parse_scene. Expected rejections
+// are std::invalid_argument and std::runtime_error (InputError among them); any other exception, a
+// crash, a sanitizer report or a hang is a bug.
 //
 // A scene names other files ("knits": [{"state": ...}], "yarns": [{"import": ...}]),
 // relative to the scene's folder. The scene is placed in fuzz/scene_files/, which holds a
@@ -9,19 +9,17 @@
 // each kind); every path is read from that folder only: one that is absolute or has a
 // '/' is replaced by "missing" before parsing, so no input makes the fuzzer read
 // /dev/zero, a pipe or anything else outside it.
-#include <unistd.h>
 
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
-#include <filesystem>
-#include <fstream>
 #include <stdexcept>
 #include <string>
 #include <typeinfo>
 
+#include "knit/scene/json_reader.hpp"
 #include "knit/scene/scene.hpp"
 
 #ifndef KNIT_FUZZ_SCENE_FILES
@@ -58,25 +56,10 @@ void confine_paths(nlohmann::json& doc) {
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-  // the input as a file, private to this process (parse_json_file reads a path), removed
-  // when the fuzzer exits
-  static const struct TempFile {
-    std::string path = (std::filesystem::temp_directory_path() /
-                        ("knit-fuzz-" + std::to_string(getpid()) + ".json"))
-                           .string();
-    ~TempFile() {
-      std::error_code ec;
-      std::filesystem::remove(path, ec);
-    }
-  } temp;
-  const std::string& path = temp.path;
   static const std::string source = std::string(KNIT_FUZZ_SCENE_FILES) + "/scene.json";
-  {
-    std::ofstream out(path, std::ios::binary | std::ios::trunc);
-    out.write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(size));
-  }
   try {
-    nlohmann::json doc = knit::parse_json_file(path);
+    nlohmann::json doc =
+        knit::parse_json_text(std::string(reinterpret_cast<const char*>(data), size), source);
     confine_paths(doc);
     const knit::Scene scene = knit::parse_scene(doc, source);
     // what a parsed scene promises: positions for every control point, at rest

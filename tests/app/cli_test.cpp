@@ -10,31 +10,15 @@
 
 #include "knit/io/state_file.hpp"
 #include "knit/solver/relaxation.hpp"
+#include "run_knitsim.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
 
-struct Result {
-  int code;
-  std::string output;
-};
-
-Result run(const std::string& args) {
-  const std::string cmd = std::string(KNIT_APP) + " " + args + " 2>&1";
-  FILE* pipe = popen(cmd.c_str(), "r");
-  std::string out;
-  std::array<char, 4096> buf;
-  while (size_t n = fread(buf.data(), 1, buf.size(), pipe)) out.append(buf.data(), n);
-  const int status = pclose(pipe);
-  return {WEXITSTATUS(status), out};
-}
-
-std::string temp_dir(const std::string& name) {
-  const fs::path p = fs::path(::testing::TempDir()) / name;
-  fs::remove_all(p);
-  return p.string();
-}
+using knit::cli_test::Result;
+using knit::cli_test::run;
+using knit::cli_test::temp_dir;
 
 TEST(Cli, RejectedSceneWritesNothing) {
   const std::string scene = ::testing::TempDir() + "/cli_bad.json";

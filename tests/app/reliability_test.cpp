@@ -20,30 +20,17 @@
 #include "knit/io/state_file.hpp"
 #include "knit/pattern/pattern.hpp"
 #include "knit/scene/scene.hpp"
+#include "run_knitsim.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
 
-struct Result {
-  int code;
-  std::string output;
-};
-
-Result run(const std::string& args) {
-  const std::string cmd = std::string(KNIT_APP) + " " + args + " 2>&1";
-  FILE* pipe = popen(cmd.c_str(), "r");
-  std::string out;
-  std::array<char, 4096> buf;
-  while (size_t n = fread(buf.data(), 1, buf.size(), pipe)) out.append(buf.data(), n);
-  const int status = pclose(pipe);
-  return {WEXITSTATUS(status), out};
-}
+using knit::cli_test::Result;
+using knit::cli_test::run;
 
 std::string temp_dir(const std::string& name) {
-  const fs::path p = fs::path(::testing::TempDir()) / ("rel_" + name);
-  fs::remove_all(p);
-  return p.string();
+  return knit::cli_test::temp_dir("rel_" + name);
 }
 
 std::string write_file(const std::string& name, const std::string& text) {

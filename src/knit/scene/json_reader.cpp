@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "knit/io/input_file.hpp"
+#include "knit/model/params.hpp"
 
 namespace knit {
 
@@ -41,11 +42,7 @@ std::string describe(const nlohmann::json& v) {
     case nlohmann::json::value_t::null:
       return "null";
     default: {
-      if (v.is_number_float()) {
-        char buf[32];
-        std::snprintf(buf, sizeof buf, "%.6g", v.get<double>());
-        return buf;
-      }
+      if (v.is_number_float()) return short_number(v.get<double>());
       return v.dump();  // an integer: at most 20 characters
     }
   }

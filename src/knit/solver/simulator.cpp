@@ -29,38 +29,34 @@ class ScopedTimer {
   std::chrono::steady_clock::time_point m_start;
 };
 
-// largest displacement of any control point between two position vectors (cm), and which
-std::pair<double, int> max_travel(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
-  double worst = 0;
-  int which = 0;
-  for (Eigen::Index k = 0; k + 2 < a.size(); k += 3) {
-    const double d = (a.segment<3>(k) - b.segment<3>(k)).squaredNorm();
-    if (d > worst) {
-      worst = d;
-      which = static_cast<int>(k / 3);
-    }
-  }
-  return {std::sqrt(worst), which};
-}
+// How far one step moved the control points (cm): the largest displacement relative to
+// the neighbouring control point on the same yarn (how much the step deformed the yarn —
+// a yarn moving rigidly, falling or swinging, scores ~0 however fast it goes), which
+// control point that was, and the largest displacement of any control point.
+struct Travel {
+  double relative = 0;
+  int relative_cp = 0;
+  double absolute = 0;
+};
 
-// largest displacement of a control point relative to its neighbour on the same yarn
-// (cm), and which: how much one step deformed the yarn. A yarn moving rigidly (falling,
-// swinging) scores ~0 however fast it goes.
-std::pair<double, int> max_relative_travel(const Model& model, const Eigen::VectorXd& a,
-                                           const Eigen::VectorXd& b) {
-  double worst = 0;
+Travel step_travel(const Model& model, const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+  double worst_rel = 0, worst_abs = 0;
   int which = 0;
-  for (const YarnInfo& y : model.yarns)
+  for (const YarnInfo& y : model.yarns) {
+    Eigen::Vector3d prev = b.segment<3>(3 * y.cp_begin) - a.segment<3>(3 * y.cp_begin);
+    worst_abs = std::max(worst_abs, prev.squaredNorm());
     for (int k = y.cp_begin + 1; k < y.cp_end; ++k) {
-      const Eigen::Vector3d dk = b.segment<3>(3 * k) - a.segment<3>(3 * k);
-      const Eigen::Vector3d dj = b.segment<3>(3 * (k - 1)) - a.segment<3>(3 * (k - 1));
-      const double d = (dk - dj).squaredNorm();
-      if (d > worst) {
-        worst = d;
+      const Eigen::Vector3d d = b.segment<3>(3 * k) - a.segment<3>(3 * k);
+      worst_abs = std::max(worst_abs, d.squaredNorm());
+      const double rel = (d - prev).squaredNorm();
+      if (rel > worst_rel) {
+        worst_rel = rel;
         which = k;
       }
+      prev = d;
     }
-  return {std::sqrt(worst), which};
+  }
+  return {std::sqrt(worst_rel), which, std::sqrt(worst_abs)};
 }
 
 }  // namespace
@@ -236,20 +232,20 @@ StepResult Simulator::step(State& state, double h) {
   // opposite way): the run is no longer trustworthy. Rigid motion, however fast, is not
   // instability.
   const double limit = 2 * m_model.params.material.radius;
-  const auto [deform, cp] = max_relative_travel(m_model, state.q, m_qnew);
-  if (deform > limit) {
+  const Travel travel = step_travel(m_model, state.q, m_qnew);
+  if (travel.relative > limit) {
+    const int cp = travel.relative_cp;
     int yarn = 0;
     while (cp >= m_model.yarns[yarn].cp_end) ++yarn;
     std::ostringstream msg;
     msg << "control point " << cp - m_model.yarns[yarn].cp_begin << " of yarn " << yarn << " moved "
-        << deform << " cm relative to its neighbour in one step at t = " << t_new
+        << travel.relative << " cm relative to its neighbour in one step at t = " << t_new
         << " s, more than the yarn diameter (" << limit
         << " cm): the run is unstable; try a smaller time step";
     res.status = StepStatus::NON_FINITE;
     res.message = msg.str();
     return res;
   }
-  const double travel = max_travel(state.q, m_qnew).first;
   state.q.swap(m_qnew);
   state.v.swap(m_vnew);
   state.time = t_new;
@@ -268,9 +264,9 @@ StepResult Simulator::step(State& state, double h) {
     m_data.warnings.push_back("the projection needed more than half its iterations (" +
                               std::to_string(res.projection.iterations) + " of " +
                               std::to_string(max_it) + ")");
-  if (travel > m_model.params.material.radius && m_model.yarns.size() > 1)
+  if (travel.absolute > m_model.params.material.radius && m_model.yarns.size() > 1)
     m_data.warnings.push_back("a yarn moved more than its radius in one step (" +
-                              std::to_string(travel) +
+                              std::to_string(travel.absolute) +
                               " cm): contacts with other yarns can be missed");
   // the force records at the result (the next step's first evaluation); the projection
   // ended by evaluating C at exactly these positions and time, so max |C| is known
