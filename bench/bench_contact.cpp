@@ -77,7 +77,7 @@ int main(int argc, char** argv) {
 
     knit::ContactTerm term(model, knit::ContactCulling::BVH);
     Eigen::VectorXd force = Eigen::VectorXd::Zero(q.size());
-    double energy = term.add_force(model, q, v, force);
+    double energy = term.add_force(model, q, v, 0.0, force);
     const double build = term.last_timings().build;
     std::vector<double> total, points_t, refit, traverse, kernel, gather, rebuild_total, cpu;
     for (int e = 0; e < evaluations; ++e) {
@@ -85,13 +85,13 @@ int main(int argc, char** argv) {
       // keeps it, as a simulation does between rebuilds
       force.setZero();
       term.set_candidate_margin(term.candidate_margin());
-      term.add_force(model, q, v, force);
+      term.add_force(model, q, v, 0.0, force);
       rebuild_total.push_back(term.last_timings().total);
       traverse.push_back(term.last_timings().traverse);
       refit.push_back(term.last_timings().refit);
       force.setZero();
       const double c0 = process_cpu_s();
-      energy = term.add_force(model, q, v, force);
+      energy = term.add_force(model, q, v, 0.0, force);
       cpu.push_back(process_cpu_s() - c0);
       const knit::ContactTimings& t = term.last_timings();
       total.push_back(t.total);

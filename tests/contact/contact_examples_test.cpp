@@ -100,7 +100,7 @@ TEST_P(ContactExamples, StartFreeOfOverlapAndUseOnlyKnownKeys) {
   EXPECT_LE(s.model.num_seg(), 300);
   ContactTerm brute(s.model, ContactCulling::BRUTE_FORCE);
   Eigen::VectorXd f = Eigen::VectorXd::Zero(s.q.size());
-  EXPECT_EQ(brute.add_force(s.model, s.q, Eigen::VectorXd::Zero(s.q.size()), f), 0.0);
+  EXPECT_EQ(brute.add_force(s.model, s.q, Eigen::VectorXd::Zero(s.q.size()), 0.0, f), 0.0);
   EXPECT_EQ(brute.last_stats().point_pairs_in_contact, 0);
   const double d = min_distance_ratio(s.model, s.q);
   EXPECT_GE(d, 1.0) << GetParam() << ": closest non-neighbouring contact points";

@@ -46,7 +46,7 @@ Eigen::VectorXd random_vector(int n, double sigma, unsigned seed) {
 Eigen::VectorXd force_of(ContactTerm& term, const Sample& s, const Eigen::VectorXd& v,
                          double* energy = nullptr) {
   Eigen::VectorXd f = Eigen::VectorXd::Zero(s.q.size());
-  const double e = term.add_force(s.model, s.q, v, f);
+  const double e = term.add_force(s.model, s.q, v, 0.0, f);
   if (energy) *energy = e;
   return f;
 }
@@ -101,7 +101,7 @@ TEST(ContactTerm, AssembledForceIsMinusEnergyGradient) {
     Eigen::VectorXd qp = s.q, qm = s.q;
     qp[k] += h;
     qm[k] -= h;
-    const double fd = -(term.energy(s.model, qp) - term.energy(s.model, qm)) / (2 * h);
+    const double fd = -(term.energy(s.model, qp, 0.0) - term.energy(s.model, qm, 0.0)) / (2 * h);
     EXPECT_NEAR(f[k], fd, 1e-6 * scale) << dof_name(k);
   }
 }
@@ -134,7 +134,7 @@ void expect_bvh_matches_brute(const Sample& s, const Eigen::VectorXd& v, const s
   if (build_at) {
     // build the tree on other positions, so that this evaluation is a refit
     Eigen::VectorXd f = Eigen::VectorXd::Zero(s.q.size());
-    bvh.add_force(s.model, *build_at, v, f);
+    bvh.add_force(s.model, *build_at, v, 0.0, f);
   }
   double e_bvh = 0, e_brute = 0;
   const Eigen::VectorXd f_bvh = force_of(bvh, s, v, &e_bvh);
@@ -209,9 +209,9 @@ TEST(ContactTerm, KeptCandidateListMatchesBruteForceAfterSmallMotion) {
   expect_bvh_matches_brute(s, v, "knit sample, kept list", &s0.q);
   ContactTerm term(s.model);
   Eigen::VectorXd f = Eigen::VectorXd::Zero(s.q.size());
-  term.add_force(s.model, s0.q, v, f);
+  term.add_force(s.model, s0.q, v, 0.0, f);
   EXPECT_TRUE(term.last_stats().candidates_rebuilt);
-  term.add_force(s.model, s.q, v, f);
+  term.add_force(s.model, s.q, v, 0.0, f);
   EXPECT_FALSE(term.last_stats().candidates_rebuilt) << "the motion was below δ/2";
 }
 
@@ -404,7 +404,7 @@ TEST(ContactTerm, PushedYarnsNeverComeCloserThanHalfTheContactDistance) {
   const double dt = 1e-5;
   for (int step = 0; step < 3000; ++step) {
     Eigen::VectorXd f = Eigen::VectorXd::Zero(q.size());
-    term.add_force(model, q, v, f);
+    term.add_force(model, q, v, 0.0, f);
     min_d = std::min(min_d, term.last_stats().min_distance_ratio);
     if (step < 1500) first_min_d = min_d;  // the first swing in and out (MEASURED below)
     for (int k = first_free; k < q.size(); ++k) {

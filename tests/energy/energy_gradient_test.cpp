@@ -108,15 +108,16 @@ void check_assembled(const char* name) {
   T term;
   Eigen::VectorXd f = Eigen::VectorXd::Zero(q.size());
   const Eigen::VectorXd v = Eigen::VectorXd::Zero(q.size());
-  term.add_force(m, q, v, f);
+  term.add_force(m, q, v, 0.0, f);
   auto e = [&](const Eigen::VectorXd& y) {
     Eigen::VectorXd tmp = Eigen::VectorXd::Zero(y.size());
-    return term.add_force(m, y, v, tmp);
+    return term.add_force(m, y, v, 0.0, tmp);
   };
   expect_gradient_matches(e, q, -f, 1e-7, 1e-5, name);
   // energy() agrees with add_force's return value
   Eigen::VectorXd tmp = Eigen::VectorXd::Zero(q.size());
-  EXPECT_NEAR(term.energy(m, q), term.add_force(m, q, v, tmp), 1e-9 * (1 + std::abs(e(q))));
+  EXPECT_NEAR(term.energy(m, q, 0.0), term.add_force(m, q, v, 0.0, tmp),
+              1e-9 * (1 + std::abs(e(q))));
 }
 
 TEST(AssembledEnergies, BendingForceIsMinusGradient) {
@@ -136,7 +137,7 @@ TEST(AssembledEnergies, GlobalDampingForceIsMinusVelocityGradientAndDissipates) 
   const Eigen::VectorXd v = test::jitter(Eigen::VectorXd::Zero(q.size()), 4.0, 9);
   GlobalDamping term;
   Eigen::VectorXd f = Eigen::VectorXd::Zero(q.size());
-  term.add_force(m, q, v, f);
+  term.add_force(m, q, v, 0.0, f);
   auto d = [&](const Eigen::VectorXd& u) {
     double sum = 0;
     for (int i = 0; i < m.num_seg(); ++i)
@@ -164,7 +165,7 @@ TEST(AssembledEnergies, GlobalDampingIsMassProportional) {
   const Eigen::VectorXd v = test::jitter(Eigen::VectorXd::Zero(m.num_dof()), 4.0, 13);
   GlobalDamping term;
   Eigen::VectorXd f = Eigen::VectorXd::Zero(v.size());
-  term.add_force(m, b.positions(), v, f);
+  term.add_force(m, b.positions(), v, 0.0, f);
   const double lambda = 2 * 1.5 / (p.material.density * ell);  // 1250 /s
   for (int k = 0; k < m.num_cp(); ++k)
     EXPECT_LT((f.segment<3>(3 * k) + lambda * m.mass[k] * v.segment<3>(3 * k)).norm(),

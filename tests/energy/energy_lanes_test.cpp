@@ -111,8 +111,8 @@ TEST(EnergyLanes, AssembledTermsMatchPlainAssembly) {
   const Eigen::VectorXd v = Eigen::VectorXd::Zero(q.size());
   for (const bool bending : {true, false}) {
     Eigen::VectorXd f = Eigen::VectorXd::Zero(q.size()), plain = f;
-    const double e =
-        bending ? BendingEnergy().add_force(m, q, v, f) : LengthEnergy().add_force(m, q, v, f);
+    const double e = bending ? BendingEnergy().add_force(m, q, v, 0.0, f)
+                             : LengthEnergy().add_force(m, q, v, 0.0, f);
     double e_plain = 0;
     for (int i = 0; i < m.num_seg(); ++i) {
       Vector12d g = Vector12d::Zero();
@@ -143,8 +143,9 @@ TEST(EnergyLanes, AssembledTermsDoNotDependOnThreadCount) {
     tbb::global_control control(tbb::global_control::max_allowed_parallelism, threads);
     Eigen::VectorXd f = Eigen::VectorXd::Zero(q.size());
     double e = 0;
-    tbb::task_arena(threads).execute(
-        [&] { e = BendingEnergy().add_force(m, q, v, f) + LengthEnergy().add_force(m, q, v, f); });
+    tbb::task_arena(threads).execute([&] {
+      e = BendingEnergy().add_force(m, q, v, 0.0, f) + LengthEnergy().add_force(m, q, v, 0.0, f);
+    });
     return std::make_pair(e, f);
   };
   const auto [e1, f1] = forces(1);

@@ -68,7 +68,7 @@ TEST(KnownEnergies, BendingOfACircularArcIsKBendLOverRSquared) {
       EXPECT_NEAR(sum, expected, 2e-5 * expected) << what;
       BendingEnergy term;
       Eigen::VectorXd f = Eigen::VectorXd::Zero(q.size());
-      const double e = term.add_force(m, q, Eigen::VectorXd::Zero(q.size()), f);
+      const double e = term.add_force(m, q, Eigen::VectorXd::Zero(q.size()), 0.0, f);
       EXPECT_NEAR(e, expected, 2e-5 * expected) << what;
       // the force has the right size too: scaling the yarn by λ about any point scales κ by
       // 1/λ, so E(λq) = E(q)/λ² and Σ f·q = −dE(λq)/dλ at λ = 1 = 2E
@@ -102,7 +102,7 @@ TEST(KnownEnergies, LengthOfAUniformlyStretchedStraightYarn) {
       const double expected = segments * k_len * strain * strain;
       LengthEnergy term;
       Eigen::VectorXd f = Eigen::VectorXd::Zero(q.size());
-      const double e = term.add_force(m, q, Eigen::VectorXd::Zero(q.size()), f);
+      const double e = term.add_force(m, q, Eigen::VectorXd::Zero(q.size()), 0.0, f);
       const std::string what =
           "shrink " + std::to_string(shrink) + ", stretch " + std::to_string(stretch);
       EXPECT_NEAR(e, expected, 1e-10 * expected) << what;
@@ -188,7 +188,7 @@ TEST(KnownEnergies, ContactOfTwoParallelYarnsMatchesTheDoubleIntegral) {
       // the assembled term (BVH culling, vectorised kernel)
       ContactTerm term(m);
       Eigen::VectorXd f = Eigen::VectorXd::Zero(y.q.size());
-      const double e = term.add_force(m, y.q, Eigen::VectorXd::Zero(y.q.size()), f);
+      const double e = term.add_force(m, y.q, Eigen::VectorXd::Zero(y.q.size()), 0.0, f);
       EXPECT_NEAR(e, expected, tolerance * expected) << what;
       EXPECT_NEAR(term.last_stats().min_distance_ratio, ratio, 1e-12) << what;
     }
@@ -196,7 +196,7 @@ TEST(KnownEnergies, ContactOfTwoParallelYarnsMatchesTheDoubleIntegral) {
   // apart by 2r or more, nothing
   const ParallelYarns apart = parallel_yarns(2.001 * r, segments, spacing, 10);
   ContactTerm term(apart.model);
-  EXPECT_EQ(term.energy(apart.model, apart.q), 0.0);
+  EXPECT_EQ(term.energy(apart.model, apart.q, 0.0), 0.0);
 }
 
 // The contact force pushes the yarns apart with −dE/ds: the net force on yarn b along y is
@@ -217,7 +217,7 @@ TEST(KnownEnergies, ContactPushesParallelYarnsApartWithMinusDEnergyDs) {
     const ParallelYarns y = parallel_yarns(s, segments, spacing, 10);
     ContactTerm term(y.model);
     Eigen::VectorXd f = Eigen::VectorXd::Zero(y.q.size());
-    term.add_force(y.model, y.q, Eigen::VectorXd::Zero(y.q.size()), f);
+    term.add_force(y.model, y.q, Eigen::VectorXd::Zero(y.q.size()), 0.0, f);
     Eigen::Vector3d on_b = Eigen::Vector3d::Zero();
     for (Eigen::Index c = y.first_b; c < f.size(); c += 3) on_b += f.segment<3>(c);
     EXPECT_NEAR(on_b.y(), expected, 1e-2 * expected) << "d = " << ratio;

@@ -116,7 +116,7 @@ TEST(Filter, RigidMotionIsLeftAlone) {
   for (VelocityFilter* f :
        {static_cast<VelocityFilter*>(&single), static_cast<VelocityFilter*>(&two_pass)}) {
     Eigen::VectorXd v = v0;
-    f->apply(m, q, v, 0.0);
+    f->apply(m, q, v, 0.0, 1e-4);
     EXPECT_LT((v - v0).norm(), 1e-11 * v0.norm()) << f->name();
   }
   EXPECT_EQ(two_pass.name(), "nonrigid_damping");
@@ -143,12 +143,12 @@ TEST(Filter, AlphaOneMakesTheMotionRigid) {
       v = random_velocity(m.num_dof(), 7);
     }
     const double before = nonrigid_residual(s, x, s.velocities(m, v));
-    f.apply(m, q, v, 0.0);
+    f.apply(m, q, v, 0.0, 1e-4);
     const double once = nonrigid_residual(s, x, s.velocities(m, v));
     EXPECT_LT(once, (smooth ? 0.05 : 0.5) * before) << (smooth ? "smooth" : "noise");
     double last = once;
     for (int it = 0; it < 30; ++it) {
-      f.apply(m, q, v, 0.0);
+      f.apply(m, q, v, 0.0, 1e-4);
       const double now = nonrigid_residual(s, x, s.velocities(m, v));
       EXPECT_LE(now, last * (1 + 1e-12));
       last = now;
@@ -223,7 +223,7 @@ TEST(Filter, SmallRegionsLetColumnsSlideLargeRegionsDampIt) {
   // the share of the sliding motion a filter keeps: mass-weighted projection onto it
   auto kept = [&](VelocityFilter& f) {
     Eigen::VectorXd v = sliding;
-    f.apply(m, q, v, 0.0);
+    f.apply(m, q, v, 0.0, 1e-4);
     double num = 0, den = 0;
     for (int c = 0; c < m.num_cp(); ++c) {
       num += m.mass[c] * v.segment<3>(3 * c).dot(sliding.segment<3>(3 * c));
@@ -257,7 +257,7 @@ TEST(Filter, MomentumIsConservedForAnyAlphaAndOverlap) {
        {static_cast<VelocityFilter*>(&one), static_cast<VelocityFilter*>(&overlapping),
         static_cast<VelocityFilter*>(&small_only)}) {
     Eigen::VectorXd v = v0;
-    f->apply(m, q, v, 0.0);
+    f->apply(m, q, v, 0.0, 1e-4);
     EXPECT_GT((v - v0).norm(), 1e-3 * v0.norm());  // it did something
     EXPECT_LT((linear_momentum(m, v) - p0).norm(), 1e-12 * p_scale);
     EXPECT_LT((angular_momentum(m, q, v) - l0).norm(), 1e-12 * l_scale);
@@ -310,7 +310,7 @@ TEST(Filter, SegmentsWithoutStitchesAreUntouched) {
   NonRigidDampingFilter f(m, 0.7, 0.3);
   Eigen::VectorXd v = random_velocity(m.num_dof(), 3);
   const Eigen::VectorXd v0 = v;
-  f.apply(m, q, v, 0.0);
+  f.apply(m, q, v, 0.0, 1e-4);
   EXPECT_EQ(v, v0);
   EXPECT_THROW(NonRigidDampingFilter(m, RegionList{{0, 99}}, 0.5), std::out_of_range);
   EXPECT_THROW(NonRigidDampingFilter(m, RegionList{{0}}, 1.5), std::invalid_argument);
@@ -323,9 +323,9 @@ TEST(Filter, ResultDoesNotDependOnThreadCount) {
   Eigen::VectorXd a = random_velocity(m.num_dof(), 5), b = a;
   {
     tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
-    f.apply(m, q, a, 0.0);
+    f.apply(m, q, a, 0.0, 1e-4);
   }
-  f.apply(m, q, b, 0.0);
+  f.apply(m, q, b, 0.0, 1e-4);
   EXPECT_EQ(a, b);
 }
 

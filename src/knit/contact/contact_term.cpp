@@ -83,7 +83,7 @@ void ContactTerm::set_candidate_margin(double margin) {
 }
 
 double ContactTerm::add_force(const Model& model, const Eigen::VectorXd& q,
-                              const Eigen::VectorXd& v, Eigen::VectorXd& force) {
+                              const Eigen::VectorXd& v, double time, Eigen::VectorXd& force) {
   assert(q.size() == model.num_dof() && force.size() == q.size());
   if (model.num_seg() != m_num_seg || model.contact_quad.size() != m_points) resize(model);
   m_stats = ContactStats{};

@@ -107,7 +107,7 @@ class ContactTerm : public Term {
   /// `force` and returns the contact energy E (erg). A model with a different number of
   /// segments than the last call gets a fresh BVH.
   double add_force(const Model& model, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
-                   Eigen::VectorXd& force) override;
+                   double time, Eigen::VectorXd& force) override;
 
   ContactCulling culling() const { return m_culling; }
   /// The candidate margin δ (cm): candidate segment pairs are found with boxes grown by

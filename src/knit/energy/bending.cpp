@@ -72,7 +72,7 @@ lanes::VecD bending_kernel_lanes(const lanes::VecD x[12], lanes::VecD rest_lengt
 }
 
 double BendingEnergy::add_force(const Model& model, const Eigen::VectorXd& q,
-                                const Eigen::VectorXd& v, Eigen::VectorXd& force) {
+                                const Eigen::VectorXd& v, double time, Eigen::VectorXd& force) {
   const double k = model.params.material.k_bend;
   // four segments per call of the lane kernel (tested against bending_kernel)
   const double e =

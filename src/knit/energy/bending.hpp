@@ -23,7 +23,7 @@ class BendingEnergy final : public Term {
  public:
   std::string_view name() const override { return "bending"; }
   double add_force(const Model& model, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
-                   Eigen::VectorXd& force) override;
+                   double time, Eigen::VectorXd& force) override;
 
  private:
   SegmentAccumulator m_acc;

@@ -13,7 +13,7 @@ double global_damping_kernel(const Vector12d& u, double k_global, Vector12d* gra
 }
 
 double GlobalDamping::add_force(const Model& model, const Eigen::VectorXd& q,
-                                const Eigen::VectorXd& v, Eigen::VectorXd& force) {
+                                const Eigen::VectorXd& v, double time, Eigen::VectorXd& force) {
   const double k = model.params.material.k_global;
   if (k == 0) return 0;
   m_acc.run(model, [&](int i, Vector12d& g) {

@@ -21,8 +21,8 @@ class GlobalDamping final : public Term {
  public:
   std::string_view name() const override { return "global_damping"; }
   double add_force(const Model& model, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
-                   Eigen::VectorXd& force) override;
-  double energy(const Model&, const Eigen::VectorXd&) override { return 0; }
+                   double time, Eigen::VectorXd& force) override;
+  double energy(const Model&, const Eigen::VectorXd&, double) override { return 0; }
 
  private:
   SegmentAccumulator m_acc;

@@ -8,8 +8,8 @@ class Gravity final : public Term {
  public:
   std::string_view name() const override { return "gravity"; }
   double add_force(const Model& model, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
-                   Eigen::VectorXd& force) override;
-  double energy(const Model& model, const Eigen::VectorXd& q) override;
+                   double time, Eigen::VectorXd& force) override;
+  double energy(const Model& model, const Eigen::VectorXd& q, double time) override;
 };
 
 }  // namespace knit

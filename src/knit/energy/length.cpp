@@ -44,7 +44,7 @@ lanes::VecD length_kernel_lanes(const lanes::VecD x[12], lanes::VecD rest_length
 }
 
 double LengthEnergy::add_force(const Model& model, const Eigen::VectorXd& q,
-                               const Eigen::VectorXd& v, Eigen::VectorXd& force) {
+                               const Eigen::VectorXd& v, double time, Eigen::VectorXd& force) {
   const double k = model.params.material.k_len;
   // four segments per call of the lane kernel (tested against length_kernel)
   const double e =

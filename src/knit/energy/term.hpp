@@ -13,10 +13,11 @@ class Term {
   virtual ~Term() = default;
   /// Short stable name ("bending", "contact", …) used in timings and logs.
   virtual std::string_view name() const = 0;
-  /// Adds the term's generalised force −∂E/∂q − ∂D/∂q̇ (dyn, per coordinate) into `force`
-  /// and returns its potential energy E (erg = g cm²/s²; 0 for pure damping).
+  /// Adds the term's generalised force −∂E/∂q − ∂D/∂q̇ (dyn, per coordinate) at positions q,
+  /// velocities v and `time` (s; terms with moving objects depend on it) into `force` and
+  /// returns its potential energy E (erg = g cm²/s²; 0 for pure damping).
   virtual double add_force(const Model& model, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
-                           Eigen::VectorXd& force) = 0;
+                           double time, Eigen::VectorXd& force) = 0;
   /// Writes what the term's last add_force found, beyond its energy and force, into the
   /// step data (the contact term: the contact set and its counters). Called by the
   /// simulator right after the evaluation at a recorded state.
@@ -24,10 +25,10 @@ class Term {
   /// Number of add_force calls so far (counted by the terms that are costly to evaluate;
   /// -1 when not counted).
   virtual long long evaluations() const { return -1; }
-  /// Potential energy alone (erg).
-  virtual double energy(const Model& model, const Eigen::VectorXd& q) {
+  /// Potential energy alone (erg) at `time`.
+  virtual double energy(const Model& model, const Eigen::VectorXd& q, double time) {
     Eigen::VectorXd f = Eigen::VectorXd::Zero(q.size());
-    return add_force(model, q, Eigen::VectorXd::Zero(q.size()), f);
+    return add_force(model, q, Eigen::VectorXd::Zero(q.size()), time, f);
   }
 };
 

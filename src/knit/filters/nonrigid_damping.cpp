@@ -204,7 +204,7 @@ NonRigidDampingFilter::NonRigidDampingFilter(const Model& model, RegionList regi
 }
 
 void NonRigidDampingFilter::apply(const Model& model, const Eigen::VectorXd& q, Eigen::VectorXd& v,
-                                  double /*time*/) {
+                                  double /*time*/, double /*h*/) {
   const Eigen::Matrix3Xd x = m_samples.positions(model, q);
   for (const RigidRegionPass& pass : m_passes) {
     if (pass.alpha() == 0 || pass.regions().empty()) continue;

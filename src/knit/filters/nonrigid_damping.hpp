@@ -83,8 +83,8 @@ class NonRigidDampingFilter : public VelocityFilter {
                         int samples_per_segment = 8);
 
   std::string_view name() const override { return "nonrigid_damping"; }
-  void apply(const Model& model, const Eigen::VectorXd& q, Eigen::VectorXd& v,
-             double time) override;
+  void apply(const Model& model, const Eigen::VectorXd& q, Eigen::VectorXd& v, double time,
+             double h) override;
 
   const SampleSegments& samples() const { return m_samples; }
   const std::vector<RigidRegionPass>& passes() const { return m_passes; }

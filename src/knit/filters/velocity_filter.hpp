@@ -13,10 +13,12 @@ class VelocityFilter {
   virtual ~VelocityFilter() = default;
   /// Short stable name used in timings ("nonrigid_damping", "plane", …).
   virtual std::string_view name() const = 0;
-  /// Changes the control-point velocities `v` (cm/s) of positions `q` (cm) at `time` (s).
-  /// Every impulse of one filter is computed from the same velocities, then applied.
-  virtual void apply(const Model& model, const Eigen::VectorXd& q, Eigen::VectorXd& v,
-                     double time) = 0;
+  /// Changes the control-point velocities `v` (cm/s) of positions `q` (cm) at `time` (s),
+  /// the end of a step of length `h` (s; a filter that removes a penetration over the next
+  /// step needs it). Every impulse of one filter is computed from the same velocities,
+  /// then applied.
+  virtual void apply(const Model& model, const Eigen::VectorXd& q, Eigen::VectorXd& v, double time,
+                     double h) = 0;
 };
 
 }  // namespace knit

@@ -99,13 +99,13 @@ void Simulator::add_filter(std::unique_ptr<VelocityFilter> filter) {
   m_filters.push_back(std::move(filter));
 }
 
-double Simulator::compute_forces(const Eigen::VectorXd& q, const Eigen::VectorXd& v,
+double Simulator::compute_forces(const Eigen::VectorXd& q, const Eigen::VectorXd& v, double time,
                                  Eigen::VectorXd& force) {
   force.setZero(q.size());
   double e = 0;
   for (auto& term : m_terms) {
     ScopedTimer timer(m_data.stage_seconds[std::string(term->name())]);
-    e += term->add_force(m_model, q, v, force);
+    e += term->add_force(m_model, q, v, time, force);
   }
   return e;
 }
@@ -150,7 +150,7 @@ void Simulator::forward(const State& state, double known_violation) {
     TermRecord& rec = m_data.terms[t];
     {
       ScopedTimer timer(m_data.stage_seconds[std::string(term.name())]);
-      rec.energy = term.add_force(m_model, state.q, state.v, m_force0);
+      rec.energy = term.add_force(m_model, state.q, state.v, state.time, m_force0);
     }
     ScopedTimer timer(m_data.stage_seconds["record"]);
     e += rec.energy;
@@ -176,7 +176,7 @@ void Simulator::unconstrained_step(const State& s, double h, Eigen::VectorXd& q_
   forward(s);
   m_qmid = s.q + 0.5 * h * s.v;
   m_vmid = s.v + 0.5 * h * inv_m.cwiseProduct(m_force0);
-  compute_forces(m_qmid, m_vmid, m_force);
+  compute_forces(m_qmid, m_vmid, s.time + 0.5 * h, m_force);
   q_out = s.q + h * m_vmid;
   v_out = s.v + h * inv_m.cwiseProduct(m_force);
 }
@@ -193,10 +193,10 @@ ProjectionResult Simulator::satisfy_constraints(State& state) {
   return m_projection.project(m_model, state.q, state.time);
 }
 
-void Simulator::apply_filters(const Eigen::VectorXd& q, Eigen::VectorXd& v, double time) {
+void Simulator::apply_filters(const Eigen::VectorXd& q, Eigen::VectorXd& v, double time, double h) {
   for (auto& f : m_filters) {
     ScopedTimer timer(m_data.stage_seconds[std::string(f->name())]);
-    f->apply(m_model, q, v, time);
+    f->apply(m_model, q, v, time, h);
   }
 }
 
@@ -220,7 +220,7 @@ StepResult Simulator::step(State& state, double h) {
     res.message = msg.str();
     return res;
   }
-  apply_filters(m_qnew, m_vnew, t_new);
+  apply_filters(m_qnew, m_vnew, t_new, h);
   if (!m_qnew.allFinite() || !m_vnew.allFinite()) {
     res.status = StepStatus::NON_FINITE;
     res.message = "positions or velocities became non-finite at t = " + std::to_string(t_new) +
@@ -289,7 +289,7 @@ double Simulator::kinetic_energy(const State& s) const {
 
 double Simulator::potential_energy(const State& s) {
   double e = 0;
-  for (auto& term : m_terms) e += term->energy(m_model, s.q);
+  for (auto& term : m_terms) e += term->energy(m_model, s.q, s.time);
   return e;
 }
 

@@ -66,9 +66,10 @@ class Simulator {
   /// Clears the stage timings in data().
   void reset_timings() { m_data.stage_seconds.clear(); }
 
-  /// Stage 1: the generalised force on the control points (dyn) at (q, v); returns the
-  /// total potential energy (erg). Records nothing.
-  double compute_forces(const Eigen::VectorXd& q, const Eigen::VectorXd& v, Eigen::VectorXd& force);
+  /// Stage 1: the generalised force on the control points (dyn) at (q, v) and `time` (s);
+  /// returns the total potential energy (erg). Records nothing.
+  double compute_forces(const Eigen::VectorXd& q, const Eigen::VectorXd& v, double time,
+                        Eigen::VectorXd& force);
   /// Stage 1: the unconstrained explicit-midpoint step from (q, v) into (q_out, v_out).
   void unconstrained_step(const State& state, double h, Eigen::VectorXd& q_out,
                           Eigen::VectorXd& v_out);
@@ -78,8 +79,8 @@ class Simulator {
   /// run whose initial state may violate them (e.g. glued yarn ends laid a yarn diameter
   /// from the point they are glued to).
   ProjectionResult satisfy_constraints(State& state);
-  /// Stage 3: every velocity filter in order.
-  void apply_filters(const Eigen::VectorXd& q, Eigen::VectorXd& v, double time);
+  /// Stage 3: every velocity filter in order, at the end (`time`) of a step of length h.
+  void apply_filters(const Eigen::VectorXd& q, Eigen::VectorXd& v, double time, double h);
 
   /// ½ vᵀ M v (erg) with the lumped mass.
   double kinetic_energy(const State& state) const;
