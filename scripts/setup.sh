@@ -9,6 +9,7 @@ packages=(
   build-essential cmake ninja-build pkg-config
   libeigen3-dev libtbb-dev libembree-dev nlohmann-json3-dev libcli11-dev
   libpng-dev zlib1g-dev libstb-dev libgtest-dev libgmock-dev libbenchmark-dev
+  libopenvdb-dev libboost-iostreams-dev
   ffmpeg gnuplot-nox clang-format
 )
 bash scripts/apt-install.sh --why setup "${packages[@]}"

@@ -2,6 +2,7 @@
 // what was expected.
 #include <gtest/gtest.h>
 
+#include "knit/objects/object.hpp"
 #include "knit/scene/scene.hpp"
 
 #include <fstream>
@@ -122,6 +123,59 @@ TEST(SceneErrors, MalformedJsonNamesLineAndColumn) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
   }
+}
+
+TEST(SceneErrors, BadObjectsAreNamed) {
+  auto objects = [](const std::string& list) { return scene_with(R"(, "objects": )" + list); };
+  // a valid one of every shape parses
+  const Scene ok = parse_scene(nlohmann::json::parse(objects(R"([
+      {"name": "floor", "plane": {"normal": [0, 0, 1]}, "friction": 0.4},
+      {"sphere": {"center": [0, 0, 5], "radius": 1}, "mechanism": "penalty", "stiffness": 1e4},
+      {"box": {"size": [1, 2, 3]}, "position": [5, 0, 0], "rotate": {"axis": [0, 0, 1], "degrees": 30}},
+      {"capsule": {"from": [0, 0, 0], "to": [0, 0, 2], "radius": 0.5}, "mechanism": "both"},
+      {"cylinder": {"from": [0, 0, 0], "to": [0, 0, 2], "radius": 0.5}},
+      {"ellipsoid": {"radii": [1, 2, 3]},
+       "keyframes": [{"time": 0}, {"time": 1, "translate": [1, 0, 0]}]},
+      {"smooth_union": {"blend": 0.5, "members": [{"sphere": {"radius": 1}},
+                                                  {"union": {"members": [{"sphere": {"radius": 2}}]}}]}}
+  ])")),
+                               "scene.json");
+  ASSERT_EQ(ok.model.objects.size(), 7u);
+  EXPECT_EQ(ok.model.objects[0]->name, "floor");
+  EXPECT_EQ(ok.model.objects[1]->name, "object1");
+  EXPECT_TRUE(ok.model.objects[1]->penalty);
+  EXPECT_FALSE(ok.model.objects[1]->filter);
+
+  expect_error(objects(R"([{"torus": {"radius": 1}}])"),
+               {"objects[0].torus", "unknown key", "sphere"});
+  expect_error(objects(R"([{"name": "x"}])"), {"objects[0]", "expected a shape"});
+  expect_error(objects(R"([{"sphere": {"radius": 1}, "mechanism": "penalty", "friction": 1}])"),
+               {"objects[0].friction", "filter"});
+  expect_error(objects(R"([{"sphere": {"radius": -1}}])"),
+               {"objects[0].sphere.radius", "positive"});
+  expect_error(objects(R"([{"sphere": {"radius": 1}, "cube": 1}])"), {"objects[0]", "cube"});
+  expect_error(objects(R"([{"sphere": {"radius": 1}, "box": {"size": [1,1,1]}}])"),
+               {"objects[0]", "one shape"});
+  expect_error(objects(R"([{"sphere": {"radius": 1},
+                            "keyframes": [{"time": 1}, {"time": 0.5}]}])"),
+               {"objects[0].keyframes[1].time", "increase"});
+  expect_error(objects(R"([{"mesh": {"path": "no_such_foot.obj"}}])"),
+               {"objects[0].mesh.path", "no_such_foot.obj"});
+  expect_error(objects(R"([{"plane": {"normal": [0, 0, 0]}}])"),
+               {"objects[0].plane.normal", "zero"});
+  expect_error(objects(R"([{"sphere": {"radius": 1}, "mechanism": "magnet"}])"),
+               {"objects[0].mechanism", "magnet"});
+  expect_error(objects(R"([{"sphere": {"radius": 1}, "stiffness": 5}])"),
+               {"objects[0].stiffness", "penalty"});
+  expect_error(objects(R"([{"sphere": {"radius": 1}, "friction": -0.5}])"),
+               {"objects[0].friction"});
+  expect_error(
+      objects(
+          R"([{"name": "a", "sphere": {"radius": 1}}, {"name": "a", "sphere": {"radius": 1}}])"),
+      {"objects[1].name", "two objects"});
+  expect_error(objects(R"([{"union": {"members": []}}])"), {"objects[0].union.members"});
+  expect_error(objects(R"([{"union": {"members": [{"sphere": {"radius": 1}}], "blend": 1}}])"),
+               {"objects[0].union.blend", "smooth_union"});
 }
 
 }  // namespace

@@ -29,6 +29,8 @@ class SampleSegments {
   int segment_of(int s) const { return s / m_per; }
   double mass(int s) const { return m_mass[s]; }  ///< g
   const std::vector<double>& masses() const { return m_mass; }
+  /// B_a(t_k) of sample k of every segment (k < samples_per_segment).
+  const Eigen::Vector4d& basis(int k) const { return m_basis[k]; }
 
   /// Midpoint positions (cm) of all samples, 3 × num_samples.
   Eigen::Matrix3Xd positions(const Model& model, const Eigen::VectorXd& q) const;

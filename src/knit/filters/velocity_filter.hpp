@@ -5,13 +5,14 @@
 #include <string_view>
 
 #include "knit/model/model.hpp"
+#include "knit/model/step_data.hpp"
 
 namespace knit {
 
 class VelocityFilter {
  public:
   virtual ~VelocityFilter() = default;
-  /// Short stable name used in timings ("nonrigid_damping", "plane", …).
+  /// Short stable name used in timings ("nonrigid_damping", "collisions").
   virtual std::string_view name() const = 0;
   /// Changes the control-point velocities `v` (cm/s) of positions `q` (cm) at `time` (s),
   /// the end of a step of length `h` (s; a filter that removes a penetration over the next
@@ -19,6 +20,14 @@ class VelocityFilter {
   /// then applied.
   virtual void apply(const Model& model, const Eigen::VectorXd& q, Eigen::VectorXd& v, double time,
                      double h) = 0;
+  /// Moves positions `q` for the velocity change the last apply made, when the step's
+  /// position update should have seen it; returns whether it moved any. The collision
+  /// filter does (see collision_filter.hpp); the default moves nothing.
+  virtual bool adjust_positions(const Model& model, Eigen::VectorXd& q) const { return false; }
+  /// Writes what the last apply found and did into the step data (the collision filter:
+  /// contacts, penetration, impulse). Called by the simulator after the step's forward at
+  /// its result.
+  virtual void record(StepData& data) const {}
 };
 
 }  // namespace knit

@@ -195,7 +195,7 @@ void build_constraint_groups(Model& m) {
   for (const Clamp& c : m.clamps) m.constraint_groups.push_back(std::make_shared<ClampGroup>(c));
 }
 
-Keyframe Clamp::pose(double time) const {
+Keyframe interpolate_keyframes(const std::vector<Keyframe>& keyframes, double time) {
   if (keyframes.empty()) return {};
   if (time <= keyframes.front().time) return keyframes.front();
   if (time >= keyframes.back().time) return keyframes.back();
@@ -209,6 +209,29 @@ Keyframe Clamp::pose(double time) const {
   k.translation = (1 - s) * a.translation + s * b.translation;
   k.rotation = a.rotation.slerp(s, b.rotation);
   return k;
+}
+
+void keyframe_rates(const std::vector<Keyframe>& keyframes, double time, Eigen::Vector3d& velocity,
+                    Eigen::Vector3d& omega) {
+  velocity.setZero();
+  omega.setZero();
+  if (keyframes.size() < 2 || time < keyframes.front().time || time >= keyframes.back().time)
+    return;
+  size_t f = 1;
+  while (keyframes[f].time <= time) ++f;
+  const Keyframe& a = keyframes[f - 1];
+  const Keyframe& b = keyframes[f];
+  const double dt = b.time - a.time;
+  velocity = (b.translation - a.translation) / dt;
+  // slerp(a, b, s) = (b a⁻¹)^s a, the shortest way: ω = axis · angle / dt of b a⁻¹
+  Eigen::Quaterniond rel = b.rotation * a.rotation.conjugate();
+  if (rel.w() < 0) rel.coeffs() = -rel.coeffs();
+  const Eigen::AngleAxisd aa(rel);
+  omega = aa.axis() * (aa.angle() / dt);
+}
+
+Keyframe Clamp::pose(double time) const {
+  return interpolate_keyframes(keyframes, time);
 }
 
 Model scale_rest_lengths(const Model& model, double scale) {

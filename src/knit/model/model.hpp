@@ -71,6 +71,16 @@ struct Keyframe {
   Eigen::Quaterniond rotation = Eigen::Quaterniond::Identity();
 };
 
+/// The pose along `keyframes` (by increasing time) at `time`: translation interpolated
+/// linearly, rotation by slerp, held before the first keyframe and after the last; no
+/// keyframes: the identity.
+Keyframe interpolate_keyframes(const std::vector<Keyframe>& keyframes, double time);
+/// The rates of that pose at `time`: d(translation)/dt (cm/s) and the angular velocity ω
+/// (rad/s, world axes) of the rotation, constant between two keyframes (those of the
+/// interval starting at `time`; zero before the first keyframe and from the last one on).
+void keyframe_rates(const std::vector<Keyframe>& keyframes, double time, Eigen::Vector3d& velocity,
+                    Eigen::Vector3d& omega);
+
 /// Clamp: a set of yarn points held rigidly to a frame that moves along keyframes
 /// (translation interpolated linearly, rotation by slerp, held before the first keyframe
 /// and after the last; no keyframes: held still).
@@ -108,6 +118,7 @@ struct KnitInfo {
 };
 
 class ConstraintGroup;
+struct SceneObject;
 
 class Model {
  public:
@@ -122,6 +133,8 @@ class Model {
   std::vector<Pin> pins;
   std::vector<Glue> glues;
   std::vector<Clamp> clamps;
+  /// Solid objects the yarn collides with (objects/object.hpp). Shared, immutable.
+  std::vector<std::shared_ptr<const SceneObject>> objects;
   /// Set when the yarn is a generated knit (see KnitInfo).
   std::optional<KnitInfo> knit;
   /// The rows the projection enforces: "length" (when solver.length_constraints), then

@@ -47,6 +47,21 @@ struct ContactRecord {
   std::vector<ContactPairRecord> pairs;  ///< segment pairs in contact, by (seg_i, seg_j)
 };
 
+/// Yarn against one solid object (objects/object.hpp) at the recorded state: what the
+/// penalty term found at the state, and what the collision filter found and did in the
+/// step that produced it.
+struct ObjectRecord {
+  std::string name;
+  /// yarn points within r of the surface (φ < r): the penalty's quadrature points plus
+  /// the filter's sample points
+  long long points_in_contact = 0;
+  /// largest r − φ over those points (cm): how far the yarn's tube overlaps the object
+  /// (0 when nothing touches; the centreline is inside the object when it exceeds r)
+  double deepest_penetration = 0;
+  /// force on the yarn (dyn): the penalty's at the state plus the filter's impulse / h
+  Eigen::Vector3d force = Eigen::Vector3d::Zero();
+};
+
 /// What one constraint group did in the last step (MODEL.md §5.2). With Λ the group's
 /// multipliers summed over the projection's iterations (q ← q − M⁻¹ ∇Cᵀ δλ), the
 /// projection moved the control points by −M⁻¹ ∇Cᵀ Λ, i.e. changed their momentum by
@@ -81,7 +96,8 @@ struct StepData {
   double potential_energy = 0;  ///< Σ term energies (erg)
   std::vector<TermRecord> terms;
   ContactRecord contact;
-  double max_violation = 0;  ///< max |C| over every constraint group at the state
+  std::vector<ObjectRecord> objects;  ///< one per object of the model, in its order
+  double max_violation = 0;           ///< max |C| over every constraint group at the state
   // --- step records, of the step that produced it
   ProjectionRecord projection;
   std::vector<ConstraintRecord> constraints;
@@ -97,6 +113,12 @@ struct StepData {
   const TermRecord* term(const std::string& name) const {
     for (const TermRecord& t : terms)
       if (t.name == name) return &t;
+    return nullptr;
+  }
+  /// The record of an object, or nullptr.
+  const ObjectRecord* object(const std::string& name) const {
+    for (const ObjectRecord& o : objects)
+      if (o.name == name) return &o;
     return nullptr;
   }
   /// The record of a constraint group, or nullptr.

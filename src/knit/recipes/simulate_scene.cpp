@@ -2,6 +2,8 @@
 
 #include "knit/filters/nonrigid_damping.hpp"
 #include "knit/io/run_dir.hpp"
+#include "knit/objects/collision_filter.hpp"
+#include "knit/objects/object.hpp"
 
 namespace knit {
 
@@ -11,6 +13,9 @@ std::unique_ptr<Simulator> make_scene_simulator(const Scene& scene) {
   for (const SceneKnit& k : scene.knits)
     sim->add_filter(std::make_unique<NonRigidDampingFilter>(sim->model(), m.alpha_small,
                                                             m.alpha_large, k.in_the_round));
+  if (std::any_of(scene.model.objects.begin(), scene.model.objects.end(),
+                  [](const auto& o) { return o->filter; }))
+    sim->add_filter(std::make_unique<CollisionFilter>(sim->model()));
   return sim;
 }
 

@@ -2,7 +2,8 @@
 // Recipe: "simulate a scene". The scene's model with the default terms (gravity, bending,
 // length, global damping when k_global > 0, yarn–yarn contact), and for a placed knit the
 // non-rigid damping filter built from its stitch coordinates (α_small, α_large of the
-// scene's material), run for the scene's duration with its time step.
+// scene's material), then the collision filter for the objects that use it (the penalty
+// term is one of the default terms), run for the scene's duration with its time step.
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>

@@ -8,6 +8,7 @@
 
 #include "knit/io/import.hpp"
 #include "knit/io/state_file.hpp"
+#include "knit/scene/scene_objects.hpp"
 #include "knit/spline/fit.hpp"
 
 namespace knit {
@@ -355,7 +356,7 @@ Params parse_params(const JsonReader& r, Params p) {
 Scene parse_scene(const nlohmann::json& doc, const std::string& source, const Params& base) {
   const JsonReader root(doc, source);
   root.allow_keys({"params", "gravity", "time_step", "duration", "output_every", "yarns", "knits",
-                   "pins", "glue", "clamps", "description"});
+                   "pins", "glue", "clamps", "objects", "description"});
   Params params = root.has("params") ? parse_params(root.at("params"), base) : base;
   if (root.has("gravity")) params.gravity = root.at("gravity").vec3();
   Scene scene;
@@ -492,6 +493,7 @@ Scene parse_scene(const nlohmann::json& doc, const std::string& source, const Pa
             "the non-rigid damping acts on a placed knit's stitches, and this scene has no "
             "\"knits\"");
   scene.model = builder.build(params);
+  if (root.has("objects")) scene.model.objects = parse_objects(root.at("objects"), source);
   scene.state.q = q0;
   scene.state.v = Eigen::VectorXd::Zero(q0.size());
   scene.state.time = 0;

@@ -12,6 +12,8 @@
 #include "knit/energy/global_damping.hpp"
 #include "knit/energy/gravity.hpp"
 #include "knit/energy/length.hpp"
+#include "knit/objects/object.hpp"
+#include "knit/objects/object_penalty.hpp"
 
 namespace knit {
 
@@ -82,6 +84,9 @@ std::vector<std::unique_ptr<Term>> default_terms(const Model& model) {
   terms.push_back(std::make_unique<LengthEnergy>());
   if (model.params.material.k_global > 0) terms.push_back(std::make_unique<GlobalDamping>());
   if (model.params.material.contact) terms.push_back(std::make_unique<ContactTerm>(model));
+  if (std::any_of(model.objects.begin(), model.objects.end(),
+                  [](const auto& o) { return o->penalty; }))
+    terms.push_back(std::make_unique<ObjectPenalty>(model));
   return terms;
 }
 
@@ -143,6 +148,9 @@ void Simulator::forward(const State& state, double known_violation) {
   pairs.clear();
   m_data.contact = ContactRecord{};
   m_data.contact.pairs = std::move(pairs);
+  m_data.objects.resize(m_model.objects.size());
+  for (size_t k = 0; k < m_model.objects.size(); ++k)
+    m_data.objects[k] = ObjectRecord{m_model.objects[k]->name};
   double e = 0;
   Eigen::Vector3d before = Eigen::Vector3d::Zero();
   for (size_t t = 0; t < m_terms.size(); ++t) {
@@ -221,6 +229,8 @@ StepResult Simulator::step(State& state, double h) {
     return res;
   }
   apply_filters(m_qnew, m_vnew, t_new, h);
+  bool moved = false;
+  for (const auto& f : m_filters) moved = f->adjust_positions(m_model, m_qnew) || moved;
   if (!m_qnew.allFinite() || !m_vnew.allFinite()) {
     res.status = StepStatus::NON_FINITE;
     res.message = "positions or velocities became non-finite at t = " + std::to_string(t_new) +
@@ -270,7 +280,10 @@ StepResult Simulator::step(State& state, double h) {
                               " cm): contacts with other yarns can be missed");
   // the force records at the result (the next step's first evaluation); the projection
   // ended by evaluating C at exactly these positions and time, so max |C| is known
-  forward(state, res.projection.max_violation);
+  // the projection ended by evaluating C at exactly these positions and time, unless a
+  // filter moved them since
+  forward(state, moved ? std::numeric_limits<double>::quiet_NaN() : res.projection.max_violation);
+  for (const auto& f : m_filters) f->record(m_data);
   if (m_data.contact.present && m_data.contact.min_distance_ratio < 0.5) {
     std::ostringstream msg;
     msg << "yarns came within half the contact distance (d = " << m_data.contact.min_distance_ratio

@@ -41,7 +41,8 @@ const char* status_word(StepStatus status);
 class Simulator {
  public:
   /// Builds the default terms for the model's parameters: gravity, bending, length,
-  /// global damping (when k_global > 0) and yarn–yarn contact (when material.contact).
+  /// global damping (when k_global > 0), yarn–yarn contact (when material.contact) and
+  /// the object penalty (when an object has `penalty` on).
   explicit Simulator(Model model);
   /// A simulator with exactly the given terms (for tests and special set-ups).
   Simulator(Model model, std::vector<std::unique_ptr<Term>> terms);

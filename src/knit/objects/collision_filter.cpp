@@ -1,0 +1,172 @@
+#include "knit/objects/collision_filter.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "knit/objects/object.hpp"
+
+namespace knit {
+
+namespace {
+
+// a sample point within r of an object's surface
+struct Hit {
+  int sample = -1;  // -1: unused slot
+  int object = 0;   // index into the filter's objects
+  Eigen::Vector3d x, n;
+  double depth = 0;  // r − φ (cm)
+  double push = 0;   // target normal velocity (cm/s)
+};
+
+}  // namespace
+
+CollisionFilter::CollisionFilter(const Model& model, int samples_per_segment)
+    : m_samples(model, samples_per_segment) {
+  for (size_t k = 0; k < model.objects.size(); ++k)
+    if (model.objects[k]->filter) m_objects.push_back(static_cast<int>(k));
+  m_last.resize(m_objects.size());
+}
+
+void CollisionFilter::apply(const Model& model, const Eigen::VectorXd& q, Eigen::VectorXd& v,
+                            double time, double h) {
+  m_h = h;
+  m_changed = false;
+  std::fill(m_last.begin(), m_last.end(), PerObject{});
+  if (m_objects.empty()) return;
+  const double r = model.params.material.radius;
+  const int per = m_samples.samples_per_segment();
+  const int nobj = static_cast<int>(m_objects.size());
+  std::vector<ObjectFrame> frames;
+  for (int k : m_objects) frames.emplace_back(*model.objects[k], time);
+
+  // segments whose ball comes within r of some object
+  const int nseg = model.num_seg();
+  std::vector<char> near(nseg, 0);
+  tbb::parallel_for(tbb::blocked_range<int>(0, nseg, 256), [&](const tbb::blocked_range<int>& b) {
+    for (int i = b.begin(); i < b.end(); ++i) {
+      Eigen::Vector3d centre;
+      double rho;
+      segment_ball(model, q, i, centre, rho);
+      for (const ObjectFrame& f : frames)
+        if (!f.ball_outside(centre, rho, r)) {
+          near[i] = 1;
+          break;
+        }
+    }
+  });
+  m_near.clear();
+  for (int i = 0; i < nseg; ++i)
+    if (near[i]) m_near.push_back(i);
+  if (m_near.empty()) return;
+
+  // the hits at the step's positions (fixed over the passes), one slot per sample × object
+  const int slots = per * nobj;
+  std::vector<Hit> hits(m_near.size() * slots);
+  const double max_push = 0.25 * r;
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, m_near.size(), 64),
+                    [&](const tbb::blocked_range<size_t>& b) {
+                      for (size_t j = b.begin(); j < b.end(); ++j) {
+                        const int i = m_near[j];
+                        const Vector12d x = gather_segment(q, model.seg_cp[i]);
+                        for (int k = 0; k < per; ++k) {
+                          const Eigen::Vector3d xs = combine(x, m_samples.basis(k));
+                          for (int o = 0; o < nobj; ++o) {
+                            Eigen::Vector3d g;
+                            const double phi = frames[o].distance(xs, &g);
+                            const double gn = g.norm();
+                            if (!(phi < r) || !(gn > 0)) continue;
+                            Hit& hit = hits[j * slots + k * nobj + o];
+                            hit.sample = i * per + k;
+                            hit.object = o;
+                            hit.x = xs;
+                            hit.n = g / gn;
+                            hit.depth = r - phi;
+                            hit.push = std::min(r - phi, max_push) / h;
+                          }
+                        }
+                      }
+                    });
+  for (const Hit& hit : hits) {
+    if (hit.sample < 0) continue;
+    PerObject& st = m_last[hit.object];
+    ++st.points;
+    st.deepest = std::max(st.deepest, hit.depth);
+  }
+
+  if (m_dv.cols() != m_samples.num_samples()) {
+    m_dv = Eigen::Matrix3Xd::Zero(3, m_samples.num_samples());
+    m_dvt = m_dv;
+  }
+  std::vector<Eigen::Vector3d> impulse(m_near.size() * nobj);
+  std::vector<char> changed(m_near.size());
+  for (int pass = 0; pass < PASSES; ++pass) {
+    std::fill(impulse.begin(), impulse.end(), Eigen::Vector3d::Zero());
+    std::fill(changed.begin(), changed.end(), 0);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, m_near.size(), 64),
+                      [&](const tbb::blocked_range<size_t>& b) {
+                        for (size_t j = b.begin(); j < b.end(); ++j) {
+                          const int i = m_near[j];
+                          const Vector12d u = gather_segment(v, model.seg_cp[i]);
+                          for (int s = 0; s < slots; ++s) {
+                            const Hit& hit = hits[j * slots + s];
+                            if (hit.sample < 0) continue;
+                            const int k = hit.sample - i * per;
+                            const Eigen::Vector3d w =
+                                combine(u, m_samples.basis(k)) - frames[hit.object].velocity(hit.x);
+                            const double wn = w.dot(hit.n);
+                            const double dwn = hit.push - wn;
+                            if (!(dwn > 1e-9)) continue;
+                            const Eigen::Vector3d wt = w - wn * hit.n;
+                            const double nt = wt.norm();
+                            const double mu = model.objects[m_objects[hit.object]]->friction;
+                            Eigen::Vector3d dv = dwn * hit.n;
+                            if (nt > 0) {
+                              const Eigen::Vector3d dvt = -std::min(1.0, mu * dwn / nt) * wt;
+                              dv += dvt;
+                              m_dvt.col(hit.sample) += dvt;
+                            }
+                            m_dv.col(hit.sample) += dv;
+                            impulse[j * nobj + hit.object] += m_samples.mass(hit.sample) * dv;
+                            changed[j] = 1;
+                          }
+                        }
+                      });
+    bool any = false;
+    for (size_t j = 0; j < m_near.size(); ++j) {
+      if (!changed[j]) continue;
+      any = true;
+      for (int o = 0; o < nobj; ++o) m_last[o].impulse += impulse[j * nobj + o];
+    }
+    if (!any) break;
+    m_changed = true;
+    m_samples.apply(model, m_dv, v);
+    for (size_t j = 0; j < m_near.size(); ++j)
+      if (changed[j]) m_dv.middleCols(m_near[j] * per, per).setZero();
+  }
+  if (m_changed) {
+    // the friction part of the change, on the control points
+    m_dvt_cp.setZero(v.size());
+    m_samples.apply(model, m_dvt, m_dvt_cp);
+    for (int i : m_near) m_dvt.middleCols(i * per, per).setZero();
+  }
+}
+
+bool CollisionFilter::adjust_positions(const Model& model, Eigen::VectorXd& q) const {
+  if (!m_changed) return false;
+  q += (0.5 * m_h) * m_dvt_cp;
+  return true;
+}
+
+void CollisionFilter::record(StepData& data) const {
+  for (size_t o = 0; o < m_objects.size(); ++o) {
+    ObjectRecord& rec = data.objects[m_objects[o]];
+    rec.points_in_contact += m_last[o].points;
+    rec.deepest_penetration = std::max(rec.deepest_penetration, m_last[o].deepest);
+    if (m_h > 0) rec.force += m_last[o].impulse / m_h;
+  }
+}
+
+}  // namespace knit
