@@ -13,6 +13,8 @@
 #include "knit/io/run_dir.hpp"
 #include "knit/io/states.hpp"
 #include "knit/render/render.hpp"
+#include "knit/scene/json_reader.hpp"
+#include "knit/scene/scene.hpp"
 
 namespace knitsim {
 namespace fs = std::filesystem;
@@ -20,7 +22,8 @@ namespace fs = std::filesystem;
 namespace {
 
 struct RenderArgs {
-  std::string input, out, size = "1024x768", view = "front", labels;
+  std::string input, out, size = "1024x768", view = "front", labels, scene;
+  bool no_objects = false;
   std::vector<std::string> compare;
   bool color_rows = false, overwrite = false;
   int spp = 4, shadow_rays = 4, ao_rays = 4;
@@ -43,6 +46,33 @@ knit::RenderOptions options_from(const RenderArgs& a) {
   o.shadow_rays = a.shadow_rays;
   o.ao_rays = a.ao_rays;
   return o;
+}
+
+// The scene whose objects to draw: --scene, or the "scene" a simulation's summary.json
+// names beside the input (in the input directory, or the folder holding it or its frames)
+std::string scene_for(const RenderArgs& a) {
+  if (!a.scene.empty() || a.no_objects || a.input.empty()) return a.scene;
+  const fs::path in = fs::absolute(a.input);
+  for (const fs::path& dir : {fs::is_directory(in) ? in : in.parent_path(),
+                              (fs::is_directory(in) ? in : in.parent_path()).parent_path()}) {
+    const fs::path summary = dir / "summary.json";
+    if (!fs::is_regular_file(summary)) continue;
+    try {
+      const nlohmann::json s = knit::parse_json_file(summary.string());
+      if (s.contains("scene") && s["scene"].is_string() &&
+          fs::is_regular_file(s["scene"].get<std::string>())) {
+        const std::string scene = s["scene"].get<std::string>();
+        if (knit::load_scene(scene).model.objects.empty()) return "";
+        std::cout << "drawing the objects of " << scene << " (from " << summary.string()
+                  << "; --no-objects to leave them out)\n";
+        return scene;
+      }
+    } catch (const std::exception&) {
+      return "";  // not a simulation's summary: draw the yarn alone
+    }
+    return "";
+  }
+  return "";
 }
 
 void note_rows(const knit::StateFile& s, const RenderArgs& a, const std::string& name) {
@@ -106,7 +136,7 @@ void render_sequence(const RenderArgs& a, knit::RenderOptions o) {
   knit::prepare_run_directory(a.out, a.overwrite);
   // one camera for the whole sequence: frame the union of every state's bounds
   Eigen::AlignedBox3d box;
-  for (const auto& f : files) box.extend(knit::state_bounds(knit::read_state_file(f)));
+  for (const auto& f : files) box.extend(knit::scene_bounds(knit::read_state_file(f), o.objects));
   o.frame = box;
   const auto t0 = std::chrono::steady_clock::now();
   for (size_t i = 0; i < files.size(); ++i) {
@@ -149,7 +179,9 @@ void check_png_name(const std::string& out) {
 }
 
 void run_render(const RenderArgs& a) {
-  const knit::RenderOptions o = options_from(a);
+  knit::RenderOptions o = options_from(a);
+  const std::string scene = scene_for(a);
+  if (!scene.empty()) o.objects = knit::load_scene(scene).model.objects;
   const bool sequence = a.compare.empty() && !a.input.empty() && fs::is_directory(a.input);
   if (!sequence) check_png_name(a.out);
   const bool existed = fs::exists(a.out);
@@ -194,8 +226,10 @@ void register_render(CLI::App& app) {
       ->check(CLI::ExistingPath);
   sub->add_option("--out,-o", a->out, "output PNG (a directory for a sequence)")->required();
   sub->add_option("--size", a->size, "image size WxH")->capture_default_str();
-  sub->add_option("--view", a->view, "front, back, side or iso")
-      ->check(CLI::IsMember({"front", "back", "side", "iso"}))
+  sub->add_option("--view", a->view,
+                  "front, back, side, iso (relative to the knit's thinnest axis) or scene (+z up, "
+                  "for knits among objects)")
+      ->check(CLI::IsMember({"front", "back", "side", "iso", "scene"}))
       ->capture_default_str();
   sub->add_flag("--color-rows", a->color_rows, "alternate colours by stitch row");
   sub->add_flag("--overwrite", a->overwrite,
@@ -213,6 +247,11 @@ void register_render(CLI::App& app) {
       ->expected(2, 64)
       ->check(CLI::ExistingFile);
   sub->add_option("--labels", a->labels, "comma-separated labels for --compare");
+  sub->add_option("--scene", a->scene,
+                  "draw this scene's objects under the yarn (default: the scene a simulation's "
+                  "summary.json beside the input names)")
+      ->check(CLI::ExistingFile);
+  sub->add_flag("--no-objects", a->no_objects, "draw the yarn alone");
   sub->add_option("--fps", a->fps, "frame rate of the movie made from a sequence")
       ->check(CLI::Range(1.0, 240.0))
       ->capture_default_str();

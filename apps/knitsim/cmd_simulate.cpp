@@ -66,7 +66,7 @@ void register_simulate(CLI::App& app) {
     run.out_dir = opts->out;
     run.overwrite = opts->overwrite;
     run.progress = !opts->quiet;
-    run.extra["scene"] = opts->scene;
+    run.extra["scene"] = std::filesystem::absolute(opts->scene).lexically_normal().string();
     add_provenance(run.extra);
     run.resume_command = resume_command(opts->out);
     const knit::RunReport report = knit::simulate_scene(scene, run);

@@ -76,4 +76,18 @@ void SampleSegments::apply(const Model& model, const Eigen::Matrix3Xd& dv,
   }
 }
 
+void SampleSegments::apply_segments(const Model& model, const std::vector<int>& segments,
+                                    const Eigen::Matrix3Xd& dv, Eigen::VectorXd& v) const {
+  for (int i : segments) {
+    Vector12d slot = Vector12d::Zero();
+    for (int k = 0; k < m_per; ++k) {
+      const int s = i * m_per + k;
+      scatter(slot, m_basis[k], m_mass[s] * dv.col(s));
+    }
+    const int c0 = model.seg_cp[i];
+    for (int a = 0; a < 4; ++a)
+      v.segment<3>(3 * (c0 + a)) += slot.segment<3>(3 * a) / model.mass[c0 + a];
+  }
+}
+
 }  // namespace knit

@@ -39,6 +39,10 @@ class SampleSegments {
   /// v += M⁻¹ J with J_k = Σ_s m_s B_k(t_s) dv_s (dv: 3 × num_samples, cm/s). Parallel and
   /// deterministic: per-segment sums, then a gather per control point in fixed order.
   void apply(const Model& model, const Eigen::Matrix3Xd& dv, Eigen::VectorXd& v) const;
+  /// The same for the samples of `segments` alone (the others' dv is taken as zero), in
+  /// the order given: serial, for a few segments at a time (a collision filter's).
+  void apply_segments(const Model& model, const std::vector<int>& segments,
+                      const Eigen::Matrix3Xd& dv, Eigen::VectorXd& v) const;
 
  private:
   int m_per;

@@ -10,19 +10,6 @@
 
 namespace knit {
 
-namespace {
-
-// a sample point within r of an object's surface
-struct Hit {
-  int sample = -1;  // -1: unused slot
-  int object = 0;   // index into the filter's objects
-  Eigen::Vector3d x, n;
-  double depth = 0;  // r − φ (cm)
-  double push = 0;   // target normal velocity (cm/s)
-};
-
-}  // namespace
-
 CollisionFilter::CollisionFilter(const Model& model, int samples_per_segment)
     : m_samples(model, samples_per_segment) {
   for (size_t k = 0; k < model.objects.size(); ++k)
@@ -62,95 +49,99 @@ void CollisionFilter::apply(const Model& model, const Eigen::VectorXd& q, Eigen:
     if (near[i]) m_near.push_back(i);
   if (m_near.empty()) return;
 
-  // the hits at the step's positions (fixed over the passes), one slot per sample × object
-  const int slots = per * nobj;
-  std::vector<Hit> hits(m_near.size() * slots);
+  // the hits at the step's positions (fixed over the passes), in blocks of BLOCK near
+  // segments: each block's hits are written and read by one task, in segment order
+  constexpr size_t BLOCK = 64;
+  const size_t nblocks = (m_near.size() + BLOCK - 1) / BLOCK;
+  if (m_blocks.size() < nblocks) m_blocks.resize(nblocks);
   const double max_push = 0.25 * r;
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, m_near.size(), 64),
-                    [&](const tbb::blocked_range<size_t>& b) {
-                      for (size_t j = b.begin(); j < b.end(); ++j) {
-                        const int i = m_near[j];
-                        const Vector12d x = gather_segment(q, model.seg_cp[i]);
-                        for (int k = 0; k < per; ++k) {
-                          const Eigen::Vector3d xs = combine(x, m_samples.basis(k));
-                          for (int o = 0; o < nobj; ++o) {
-                            Eigen::Vector3d g;
-                            const double phi = frames[o].distance(xs, &g);
-                            const double gn = g.norm();
-                            if (!(phi < r) || !(gn > 0)) continue;
-                            Hit& hit = hits[j * slots + k * nobj + o];
-                            hit.sample = i * per + k;
-                            hit.object = o;
-                            hit.x = xs;
-                            hit.n = g / gn;
-                            hit.depth = r - phi;
-                            hit.push = std::min(r - phi, max_push) / h;
-                          }
-                        }
-                      }
-                    });
-  for (const Hit& hit : hits) {
-    if (hit.sample < 0) continue;
-    PerObject& st = m_last[hit.object];
-    ++st.points;
-    st.deepest = std::max(st.deepest, hit.depth);
-  }
+  tbb::parallel_for(size_t(0), nblocks, [&](size_t blk) {
+    std::vector<Hit>& out = m_blocks[blk];
+    out.clear();
+    for (size_t j = blk * BLOCK; j < std::min(m_near.size(), (blk + 1) * BLOCK); ++j) {
+      const int i = m_near[j];
+      const Vector12d x = gather_segment(q, model.seg_cp[i]);
+      for (int k = 0; k < per; ++k) {
+        const Eigen::Vector3d xs = combine(x, m_samples.basis(k));
+        for (int o = 0; o < nobj; ++o) {
+          Eigen::Vector3d g;
+          const double phi = frames[o].distance(xs, &g);
+          const double gn = g.norm();
+          if (!(phi < r) || !(gn > 0)) continue;
+          Hit hit;
+          hit.sample = i * per + k;
+          hit.object = o;
+          hit.near = static_cast<int>(j);
+          hit.x = xs;
+          hit.n = g / gn;
+          hit.depth = r - phi;
+          hit.push = std::min(r - phi, max_push) / h;
+          out.push_back(hit);
+        }
+      }
+    }
+  });
+  for (size_t blk = 0; blk < nblocks; ++blk)
+    for (const Hit& hit : m_blocks[blk]) {
+      PerObject& st = m_last[hit.object];
+      ++st.points;
+      st.deepest = std::max(st.deepest, hit.depth);
+    }
 
   if (m_dv.cols() != m_samples.num_samples()) {
     m_dv = Eigen::Matrix3Xd::Zero(3, m_samples.num_samples());
     m_dvt = m_dv;
   }
-  std::vector<Eigen::Vector3d> impulse(m_near.size() * nobj);
+  std::vector<Eigen::Vector3d> impulse(nblocks * nobj);
   std::vector<char> changed(m_near.size());
   for (int pass = 0; pass < PASSES; ++pass) {
     std::fill(impulse.begin(), impulse.end(), Eigen::Vector3d::Zero());
     std::fill(changed.begin(), changed.end(), 0);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, m_near.size(), 64),
-                      [&](const tbb::blocked_range<size_t>& b) {
-                        for (size_t j = b.begin(); j < b.end(); ++j) {
-                          const int i = m_near[j];
-                          const Vector12d u = gather_segment(v, model.seg_cp[i]);
-                          for (int s = 0; s < slots; ++s) {
-                            const Hit& hit = hits[j * slots + s];
-                            if (hit.sample < 0) continue;
-                            const int k = hit.sample - i * per;
-                            const Eigen::Vector3d w =
-                                combine(u, m_samples.basis(k)) - frames[hit.object].velocity(hit.x);
-                            const double wn = w.dot(hit.n);
-                            const double dwn = hit.push - wn;
-                            if (!(dwn > 1e-9)) continue;
-                            const Eigen::Vector3d wt = w - wn * hit.n;
-                            const double nt = wt.norm();
-                            const double mu = model.objects[m_objects[hit.object]]->friction;
-                            Eigen::Vector3d dv = dwn * hit.n;
-                            if (nt > 0) {
-                              const Eigen::Vector3d dvt = -std::min(1.0, mu * dwn / nt) * wt;
-                              dv += dvt;
-                              m_dvt.col(hit.sample) += dvt;
-                            }
-                            m_dv.col(hit.sample) += dv;
-                            impulse[j * nobj + hit.object] += m_samples.mass(hit.sample) * dv;
-                            changed[j] = 1;
-                          }
-                        }
-                      });
-    bool any = false;
-    for (size_t j = 0; j < m_near.size(); ++j) {
-      if (!changed[j]) continue;
-      any = true;
-      for (int o = 0; o < nobj; ++o) m_last[o].impulse += impulse[j * nobj + o];
-    }
-    if (!any) break;
-    m_changed = true;
-    m_samples.apply(model, m_dv, v);
+    tbb::parallel_for(size_t(0), nblocks, [&](size_t blk) {
+      int last_near = -1;
+      Vector12d u;
+      for (const Hit& hit : m_blocks[blk]) {
+        const int i = m_near[hit.near];
+        if (hit.near != last_near) {
+          u = gather_segment(v, model.seg_cp[i]);
+          last_near = hit.near;
+        }
+        const int k = hit.sample - i * per;
+        const Eigen::Vector3d w =
+            combine(u, m_samples.basis(k)) - frames[hit.object].velocity(hit.x);
+        const double wn = w.dot(hit.n);
+        const double dwn = hit.push - wn;
+        if (!(dwn > 1e-9)) continue;
+        const Eigen::Vector3d wt = w - wn * hit.n;
+        const double nt = wt.norm();
+        const double mu = model.objects[m_objects[hit.object]]->friction;
+        Eigen::Vector3d dv = dwn * hit.n;
+        if (nt > 0) {
+          const Eigen::Vector3d dvt = -std::min(1.0, mu * dwn / nt) * wt;
+          dv += dvt;
+          m_dvt.col(hit.sample) += dvt;
+        }
+        m_dv.col(hit.sample) += dv;
+        impulse[blk * nobj + hit.object] += m_samples.mass(hit.sample) * dv;
+        changed[hit.near] = 1;
+      }
+    });
+    for (size_t b = 0; b < nblocks; ++b)
+      for (int o = 0; o < nobj; ++o) m_last[o].impulse += impulse[b * nobj + o];
+    m_changed_segments.clear();
     for (size_t j = 0; j < m_near.size(); ++j)
-      if (changed[j]) m_dv.middleCols(m_near[j] * per, per).setZero();
+      if (changed[j]) m_changed_segments.push_back(m_near[j]);
+    if (m_changed_segments.empty()) break;
+    if (!m_changed) m_touched = m_changed_segments;  // later passes touch a subset
+    m_changed = true;
+    m_samples.apply_segments(model, m_changed_segments, m_dv, v);
+    for (int i : m_changed_segments) m_dv.middleCols(i * per, per).setZero();
   }
   if (m_changed) {
     // the friction part of the change, on the control points
     m_dvt_cp.setZero(v.size());
-    m_samples.apply(model, m_dvt, m_dvt_cp);
-    for (int i : m_near) m_dvt.middleCols(i * per, per).setZero();
+    m_samples.apply_segments(model, m_touched, m_dvt, m_dvt_cp);
+    for (int i : m_touched) m_dvt.middleCols(i * per, per).setZero();
   }
 }
 

@@ -58,10 +58,21 @@ class CollisionFilter : public VelocityFilter {
   double m_h = 0;
   // scratch
   std::vector<int> m_near;  // segments near some filter object
+  // a sample point within r of an object's surface
+  struct Hit {
+    int sample = 0;  // global sample index
+    int object = 0;  // index into m_objects
+    int near = 0;    // index into m_near of its segment
+    Eigen::Vector3d x, n;
+    double depth = 0;  // r − φ (cm)
+    double push = 0;   // target normal velocity (cm/s)
+  };
+  std::vector<std::vector<Hit>> m_blocks;  // hits per block of near segments
   Eigen::Matrix3Xd m_dv;
   Eigen::Matrix3Xd m_dvt;    // the friction part of the samples' Δv
   Eigen::VectorXd m_dvt_cp;  // and on the control points
   bool m_changed = false;
+  std::vector<int> m_changed_segments, m_touched;  // segments changed by a pass, by the first
 };
 
 }  // namespace knit

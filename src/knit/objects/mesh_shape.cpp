@@ -256,6 +256,22 @@ TriangleMesh surface_mesh(const Shape& shape, const Eigen::AlignedBox3d& region_
   return out;
 }
 
+TriangleMesh object_surface(const SceneObject& object, double time,
+                            const Eigen::AlignedBox3d& world_region, double voxel) {
+  const ObjectFrame frame(object, time);
+  // the region in the object frame: the box around its 8 corners taken there
+  Eigen::AlignedBox3d local;
+  for (int c = 0; c < 8; ++c) {
+    const Eigen::Vector3d corner =
+        world_region.corner(static_cast<Eigen::AlignedBox3d::CornerType>(c));
+    local.extend(frame.rotation().transpose() * (corner - frame.origin()));
+  }
+  if (!(voxel > 0)) voxel = world_region.diagonal().norm() / 160;
+  TriangleMesh mesh = surface_mesh(*object.shape, local, voxel);
+  for (Eigen::Vector3d& v : mesh.vertices) v = frame.to_world(v);
+  return mesh;
+}
+
 void write_obj_mesh(const TriangleMesh& mesh, const std::string& path) {
   std::ostringstream out;
   out.precision(7);

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "knit/objects/object.hpp"
 #include "knit/objects/shape.hpp"
 
 namespace knit {
@@ -49,6 +50,11 @@ ShapePtr make_mesh_shape(const TriangleMesh& mesh, const MeshGridOptions& option
 /// on a grid of `voxel` cm (0: region diagonal / 160). A shape reaching past the region
 /// is closed by the region's faces (a plane becomes a slab whose top is the plane).
 TriangleMesh surface_mesh(const Shape& shape, const Eigen::AlignedBox3d& region, double voxel = 0);
+
+/// The surface of `object` at `time` in world coordinates, where it lies inside
+/// `world_region` (cm; see surface_mesh), sampled with `voxel` cm (0: region diagonal / 160).
+TriangleMesh object_surface(const SceneObject& object, double time,
+                            const Eigen::AlignedBox3d& world_region, double voxel = 0);
 
 /// Writes `mesh` as a Wavefront OBJ (`v` and `f` lines) atomically.
 void write_obj_mesh(const TriangleMesh& mesh, const std::string& path);

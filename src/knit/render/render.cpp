@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "knit/io/states.hpp"
+#include "knit/objects/mesh_shape.hpp"
 #include "knit/spline/basis.hpp"
 
 namespace knit {
@@ -20,7 +21,7 @@ using Vec3 = Eigen::Vector3d;
 using Col = Eigen::Vector3f;
 
 constexpr double PI = 3.14159265358979323846;
-constexpr unsigned CURVES_ID = 0, BACKDROP_ID = 1, CAPS_ID = 2;
+constexpr unsigned CURVES_ID = 0, BACKDROP_ID = 1, CAPS_ID = 2, OBJECTS_ID = 3;
 
 // sRGB ↔ linear
 float srgb_to_linear(float c) {
@@ -97,6 +98,11 @@ void view_axes(const Eigen::AlignedBox3d& box, View view, Vec3& forward, Vec3& u
     case View::ISO:
       forward = -(n + 0.65 * front_right + 0.55 * up).normalized();
       break;
+    case View::SCENE:
+      // the world as it stands: +z up, seen from the front (−y), right (+x) and above
+      up = Vec3::UnitZ();
+      forward = -Vec3(0.5, -1, 0.6).normalized();
+      break;
   }
 }
 
@@ -107,7 +113,9 @@ View parse_view(const std::string& name) {
   if (name == "back") return View::BACK;
   if (name == "side") return View::SIDE;
   if (name == "iso") return View::ISO;
-  throw std::invalid_argument("unknown view '" + name + "' (expected front, back, side or iso)");
+  if (name == "scene") return View::SCENE;
+  throw std::invalid_argument("unknown view '" + name +
+                              "' (expected front, back, side, iso or scene)");
 }
 
 Vec3 Camera::direction(double px, double py) const {
@@ -154,6 +162,19 @@ Eigen::AlignedBox3d state_bounds(const StateFile& state) {
   return box;
 }
 
+Eigen::AlignedBox3d scene_bounds(const StateFile& state,
+                                 const std::vector<std::shared_ptr<const SceneObject>>& objects) {
+  Eigen::AlignedBox3d box = state_bounds(state);
+  for (const auto& o : objects) {
+    const Eigen::AlignedBox3d local = o->shape->bounds();
+    if (!local.diagonal().allFinite()) continue;
+    const ObjectFrame f(*o, state.state.time);
+    for (int c = 0; c < 8; ++c)
+      box.extend(f.to_world(local.corner(static_cast<Eigen::AlignedBox3d::CornerType>(c))));
+  }
+  return box;
+}
+
 Image render_state(const StateFile& state, const RenderOptions& opt) {
   check_state_file(state, "render");
   if (!state.state.q.allFinite())
@@ -164,7 +185,8 @@ Image render_state(const StateFile& state, const RenderOptions& opt) {
     throw std::invalid_argument("render: need spp >= 1 and non-negative shadow and AO rays");
 
   const Eigen::AlignedBox3d bounds = state_bounds(state);
-  const Eigen::AlignedBox3d frame = opt.frame.value_or(bounds);
+  const Eigen::AlignedBox3d frame =
+      opt.frame.value_or(opt.objects.empty() ? bounds : scene_bounds(state, opt.objects));
   const Camera cam = frame_camera(frame, opt.view, opt.width, opt.height);
   const double diag = frame.sizes().norm();
   double max_radius = 0;
@@ -278,6 +300,37 @@ Image render_state(const StateFile& state, const RenderOptions& opt) {
     rtcAttachGeometryByID(dev.scene, geom, CAPS_ID);
     rtcReleaseGeometry(geom);
   }
+  if (!opt.objects.empty()) {
+    // the objects' surfaces at the state's time, within the frame grown by half its size
+    Eigen::AlignedBox3d region = frame;
+    region.min() -= 0.5 * frame.sizes();
+    region.max() += 0.5 * frame.sizes();
+    std::vector<float> vertices;
+    std::vector<unsigned> indices;
+    for (const auto& o : opt.objects) {
+      const TriangleMesh m =
+          object_surface(*o, state.state.time, region, region.sizes().norm() / 240);
+      const unsigned base = static_cast<unsigned>(vertices.size() / 3);
+      for (const Vec3& v : m.vertices)
+        for (int d = 0; d < 3; ++d) vertices.push_back(static_cast<float>(v[d]));
+      for (const Eigen::Vector3i& t : m.triangles)
+        for (int d = 0; d < 3; ++d) indices.push_back(base + static_cast<unsigned>(t[d]));
+    }
+    if (!indices.empty()) {
+      RTCGeometry geom = rtcNewGeometry(dev.device, RTC_GEOMETRY_TYPE_TRIANGLE);
+      auto* vtx = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0,
+                                                              RTC_FORMAT_FLOAT3, 3 * sizeof(float),
+                                                              vertices.size() / 3));
+      auto* tri = static_cast<unsigned*>(
+          rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                  3 * sizeof(unsigned), indices.size() / 3));
+      std::copy(vertices.begin(), vertices.end(), vtx);
+      std::copy(indices.begin(), indices.end(), tri);
+      rtcCommitGeometry(geom);
+      rtcAttachGeometryByID(dev.scene, geom, OBJECTS_ID);
+      rtcReleaseGeometry(geom);
+    }
+  }
   if (opt.backdrop) {
     // plane across the axis the camera looks along most, behind the cloth
     int k = 0;
@@ -319,6 +372,7 @@ Image render_state(const StateFile& state, const RenderOptions& opt) {
   const float sun = 1.0f, sky = 0.5f;
   const double ao_distance = 6 * max_radius;
   const Col backdrop_colour = hex_colour(0x8A949C);
+  const Col object_colour = hex_colour(0x9AA7B2);
 
   auto occluded = [&](const Vec3& org, const Vec3& dir, double tfar) {
     RTCIntersectContext ctx;
@@ -370,7 +424,7 @@ Image render_state(const StateFile& state, const RenderOptions& opt) {
     Vec3 n(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z);
     n.normalize();
     if (n.dot(dir) > 0) n = -n;
-    Col albedo = backdrop_colour;
+    Col albedo = rh.hit.geomID == OBJECTS_ID ? object_colour : backdrop_colour;
     Vec3 tangent = Vec3::Zero();
     if (rh.hit.geomID == CAPS_ID) {
       hit_yarn = true;

@@ -6,10 +6,12 @@
 // thinnest axis n (the normal of a swatch): `front` looks at the face on the +n side,
 // `back` at the −n side, `side` along the swatch from its right edge, `iso` from above
 // the front-right. The image's up direction is +z, or +y when n is z (a swatch lying in
-// the xy plane). A key light from the upper left casts soft shadows (several rays to an
-// area light), ambient occlusion darkens crevices, pixels are supersampled with
-// jittered samples, and a backdrop plane sits behind the cloth to catch its shadow.
-// Rendering is parallel over image tiles (TBB); results do not depend on the thread count.
+// the xy plane). `scene` ignores the box's shape and looks at the world as it stands (+z up,
+// from the front-right and above): the view for a knit among objects under gravity. A key light
+// from the upper left casts soft shadows (several rays to an area light), ambient occlusion darkens
+// crevices, pixels are supersampled with jittered samples, and a backdrop plane sits behind the
+// cloth to catch its shadow. Rendering is parallel over image tiles (TBB); results do not depend on
+// the thread count.
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstdint>
@@ -18,12 +20,13 @@
 #include <vector>
 
 #include "knit/io/state_file.hpp"
+#include "knit/objects/object.hpp"
 
 namespace knit {
 
-enum class View { FRONT, BACK, SIDE, ISO };
+enum class View { FRONT, BACK, SIDE, ISO, SCENE };
 
-/// Parses front|back|side|iso (throws std::invalid_argument naming the value otherwise).
+/// Parses front|back|side|iso|scene (throws std::invalid_argument naming the value otherwise).
 View parse_view(const std::string& name);
 
 /// An 8-bit sRGB image, rows top to bottom, and per pixel the fraction of samples that
@@ -65,7 +68,15 @@ struct RenderOptions {
   /// Box the camera frames; default: state_bounds (give the same box to every frame of
   /// an animation or every panel of a comparison so their scale matches).
   std::optional<Eigen::AlignedBox3d> frame;
+  /// Solid objects drawn under the yarn at the state's time (their surfaces where they lie
+  /// within the framed box grown by half its size: a plane is drawn as a slab that wide).
+  std::vector<std::shared_ptr<const SceneObject>> objects;
 };
+
+/// The box a camera should frame for `state` among `objects`: the yarn's bounds and the
+/// bounds of every bounded object at the state's time.
+Eigen::AlignedBox3d scene_bounds(const StateFile& state,
+                                 const std::vector<std::shared_ptr<const SceneObject>>& objects);
 
 /// Renders the yarns of `state`. Throws std::invalid_argument on bad options or state.
 Image render_state(const StateFile& state, const RenderOptions& options);

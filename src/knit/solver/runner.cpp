@@ -1,5 +1,7 @@
 #include "knit/solver/runner.hpp"
 
+#include "knit/objects/object.hpp"
+
 #include <tbb/global_control.h>
 #include <tbb/info.h>
 #include <tbb/task_arena.h>
@@ -59,6 +61,9 @@ std::string log_header(const Simulator& sim) {
   for (const auto& group : sim.model().constraint_groups)
     if (group->kind() != "length")
       for (const char* axis : {"_fx", "_fy", "_fz"}) h += "," + group->name() + axis;
+  for (const auto& object : sim.model().objects)
+    for (const char* col : {"_contacts", "_penetration", "_fx", "_fy", "_fz"})
+      h += "," + object->name + col;
   return h;
 }
 
@@ -267,6 +272,9 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
   long long contact_samples = 0;
   double min_d = std::numeric_limits<double>::infinity();
   std::map<std::string, long long> warnings;
+  // per object: deepest penetration over the run (cm) and the mean of its contact points
+  std::vector<double> object_deepest(model.objects.size(), 0.0),
+      object_points(model.objects.size(), 0.0);
   std::vector<double> short_steps;
   const bool tty = isatty(fileno(stderr));
   bool printed_progress = false;
@@ -288,6 +296,11 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
         const ConstraintRecord* c = data.constraint(group->name());
         const Eigen::Vector3d f = c ? c->force : Eigen::Vector3d::Zero();
         log << "," << f[0] << "," << f[1] << "," << f[2];
+      }
+      for (size_t o = 0; o < model.objects.size(); ++o) {
+        const ObjectRecord rec = o < data.objects.size() ? data.objects[o] : ObjectRecord{};
+        log << "," << rec.points_in_contact << "," << rec.deepest_penetration << "," << rec.force[0]
+            << "," << rec.force[1] << "," << rec.force[2];
       }
       log << "\n" << std::flush;
       if (opt.write_frames && frame) {
@@ -338,6 +351,10 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
       contact_pairs_sum += static_cast<double>(data.contact.point_pairs_in_contact);
       ++contact_samples;
       min_d = std::min(min_d, data.contact.min_distance_ratio);
+    }
+    for (size_t o = 0; o < data.objects.size() && o < object_deepest.size(); ++o) {
+      object_deepest[o] = std::max(object_deepest[o], data.objects[o].deepest_penetration);
+      object_points[o] += static_cast<double>(data.objects[o].points_in_contact);
     }
     for (const std::string& w : data.warnings) ++warnings[w.substr(0, w.find(" ("))];
     signal = interrupt_signal();
@@ -428,6 +445,18 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
     s["min_contact_distance"] = finite_or_null(min_d);
   }
   s["constraint_forces"] = constraint_forces_json(data);
+  if (!model.objects.empty()) {
+    nlohmann::json objects = nlohmann::json::object();
+    for (size_t o = 0; o < model.objects.size(); ++o) {
+      const ObjectRecord rec = o < data.objects.size() ? data.objects[o] : ObjectRecord{};
+      objects[model.objects[o]->name] = {
+          {"max_penetration_cm", object_deepest[o]},
+          {"contact_points_mean", report.steps > 0 ? object_points[o] / report.steps : 0.0},
+          {"contact_points", rec.points_in_contact},
+          {"force_dyn", vec_json(rec.force)}};
+    }
+    s["objects"] = objects;
+  }
   nlohmann::json stages = nlohmann::json::object();
   for (const auto& [name, sec] : data.stage_seconds) stages[name] = sec;
   s["stage_seconds"] = stages;
