@@ -13,7 +13,7 @@ namespace knitsim {
 
 void register_simulate(CLI::App& app) {
   struct Opts {
-    std::string scene, out, resume;
+    std::string scene, out, resume, knit;
     int threads = 0;
     double duration = 0;
     bool quiet = false, overwrite = false;
@@ -29,6 +29,10 @@ void register_simulate(CLI::App& app) {
                   "go on from a state of an earlier run of this scene (its final.kstate or a "
                   "frame) to the scene's end; into that run's directory, the run goes on there")
       ->check(CLI::ExistingFile);
+  cmd->add_option("--knit", opts->knit,
+                  "place this relaxed knit (.kstate from `knitsim relax`) where the scene's one "
+                  "knit is, instead of the state the scene names")
+      ->check(CLI::ExistingFile);
   add_threads_option(cmd, opts->threads);
   cmd->add_option("--duration", opts->duration, "override the scene's duration (s)")
       ->check(finite_positive(knit::MAX_DURATION));
@@ -36,7 +40,8 @@ void register_simulate(CLI::App& app) {
   add_export_option(cmd, opts->export_format);
   cmd->callback([opts, cmd]() {
     // everything is validated before anything is written
-    knit::Scene scene = knit::load_scene(opts->scene);
+    knit::Scene scene = opts->knit.empty() ? knit::load_scene(opts->scene)
+                                           : knit::load_scene_with_knit(opts->scene, opts->knit);
     if (cmd->count("--duration")) {
       knit::check_duration(opts->duration, scene.model.params.solver.time_step);
       scene.duration = opts->duration;
@@ -67,6 +72,8 @@ void register_simulate(CLI::App& app) {
     run.overwrite = opts->overwrite;
     run.progress = !opts->quiet;
     run.extra["scene"] = std::filesystem::absolute(opts->scene).lexically_normal().string();
+    if (!opts->knit.empty())
+      run.extra["knit_state"] = std::filesystem::absolute(opts->knit).lexically_normal().string();
     add_provenance(run.extra);
     run.resume_command = resume_command(opts->out);
     const knit::RunReport report = knit::simulate_scene(scene, run);

@@ -40,5 +40,8 @@ Scene parse_scene(const nlohmann::json& doc, const std::string& source,
 Scene scene_from_knit_state(const std::string& kstate_path, const Params& params);
 /// Reads and parses a scene file.
 Scene load_scene(const std::string& path);
+/// Reads a scene file with one knit and places the relaxed knit of `kstate_path` (a path
+/// as given on a command line) where the scene's knit is, instead of the state it names.
+Scene load_scene_with_knit(const std::string& path, const std::string& kstate_path);
 
 }  // namespace knit
