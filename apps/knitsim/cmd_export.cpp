@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "commands.hpp"
+#include "common.hpp"
 #include "knit/io/export.hpp"
 #include "knit/io/states.hpp"
 
@@ -14,18 +15,21 @@ namespace {
 
 struct ExportArgs {
   std::string input, format, out;
+  std::string scene;
   int samples = knit::EXPORT_SAMPLES_PER_SEGMENT;
-  bool ascii = false;
+  bool ascii = false, no_objects = false;
+  std::vector<std::shared_ptr<const knit::SceneObject>> objects;
 };
 
 void write_one(const knit::StateFile& s, const ExportArgs& a, const std::string& out) {
   if (a.format == "obj") knit::export_obj(s, out, a.samples);
   if (a.format == "bcc") knit::export_bcc(s, out, a.samples);
   if (a.format == "ply") knit::export_ply(s, out, !a.ascii, a.samples);
-  if (a.format == "usd") knit::export_usd({s}, {s.state.time}, out);
+  if (a.format == "usd") knit::export_usd({s}, {s.state.time}, out, a.objects);
 }
 
-void run_export(const ExportArgs& a) {
+void run_export(ExportArgs a) {
+  if (a.format == "usd") a.objects = objects_for(a.input, a.scene, a.no_objects);
   if (!fs::is_directory(a.input)) {
     write_one(knit::load_state(a.input), a, a.out);
     std::cout << "wrote " << a.out << "\n";
@@ -49,7 +53,7 @@ void run_export(const ExportArgs& a) {
                    "frame index at 24 frames/s\n";
       for (size_t i = 0; i < times.size(); ++i) times[i] = static_cast<double>(i) / 24.0;
     }
-    knit::export_usd(frames, times, a.out);
+    knit::export_usd(frames, times, a.out, a.objects);
     std::cout << "wrote " << a.out << " (" << frames.size() << " time samples)\n";
     return;
   }
@@ -82,6 +86,11 @@ void register_export(CLI::App& app) {
   sub->add_option("--samples", args->samples, "polyline samples per spline segment (obj, bcc, ply)")
       ->check(CLI::Range(1, 1000));
   sub->add_flag("--ascii", args->ascii, "ascii PLY instead of binary");
+  sub->add_option("--scene", args->scene,
+                  "usd: write this scene's objects beside the yarn (default: the scene a "
+                  "simulation's summary.json beside the input names)")
+      ->check(CLI::ExistingFile);
+  sub->add_flag("--no-objects", args->no_objects, "usd: the yarn alone");
   sub->callback([args] { run_export(*args); });
 }
 

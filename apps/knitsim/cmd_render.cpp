@@ -9,12 +9,11 @@
 #include <stdexcept>
 
 #include "commands.hpp"
+#include "common.hpp"
 #include "knit/io/process.hpp"
 #include "knit/io/run_dir.hpp"
 #include "knit/io/states.hpp"
 #include "knit/render/render.hpp"
-#include "knit/scene/json_reader.hpp"
-#include "knit/scene/scene.hpp"
 
 namespace knitsim {
 namespace fs = std::filesystem;
@@ -46,33 +45,6 @@ knit::RenderOptions options_from(const RenderArgs& a) {
   o.shadow_rays = a.shadow_rays;
   o.ao_rays = a.ao_rays;
   return o;
-}
-
-// The scene whose objects to draw: --scene, or the "scene" a simulation's summary.json
-// names beside the input (in the input directory, or the folder holding it or its frames)
-std::string scene_for(const RenderArgs& a) {
-  if (!a.scene.empty() || a.no_objects || a.input.empty()) return a.scene;
-  const fs::path in = fs::absolute(a.input);
-  for (const fs::path& dir : {fs::is_directory(in) ? in : in.parent_path(),
-                              (fs::is_directory(in) ? in : in.parent_path()).parent_path()}) {
-    const fs::path summary = dir / "summary.json";
-    if (!fs::is_regular_file(summary)) continue;
-    try {
-      const nlohmann::json s = knit::parse_json_file(summary.string());
-      if (s.contains("scene") && s["scene"].is_string() &&
-          fs::is_regular_file(s["scene"].get<std::string>())) {
-        const std::string scene = s["scene"].get<std::string>();
-        if (knit::load_scene(scene).model.objects.empty()) return "";
-        std::cout << "drawing the objects of " << scene << " (from " << summary.string()
-                  << "; --no-objects to leave them out)\n";
-        return scene;
-      }
-    } catch (const std::exception&) {
-      return "";  // not a simulation's summary: draw the yarn alone
-    }
-    return "";
-  }
-  return "";
 }
 
 void note_rows(const knit::StateFile& s, const RenderArgs& a, const std::string& name) {
@@ -180,8 +152,7 @@ void check_png_name(const std::string& out) {
 
 void run_render(const RenderArgs& a) {
   knit::RenderOptions o = options_from(a);
-  const std::string scene = scene_for(a);
-  if (!scene.empty()) o.objects = knit::load_scene(scene).model.objects;
+  o.objects = objects_for(a.input, a.scene, a.no_objects);
   const bool sequence = a.compare.empty() && !a.input.empty() && fs::is_directory(a.input);
   if (!sequence) check_png_name(a.out);
   const bool existed = fs::exists(a.out);

@@ -77,7 +77,7 @@ void register_simulate(CLI::App& app) {
     add_provenance(run.extra);
     run.resume_command = resume_command(opts->out);
     const knit::RunReport report = knit::simulate_scene(scene, run);
-    finish_run(report, opts->out, opts->export_format);
+    finish_run(report, opts->out, opts->export_format, scene.model.objects);
   });
 }
 

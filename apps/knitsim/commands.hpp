@@ -11,5 +11,6 @@ void register_render(CLI::App& app);
 void register_plot(CLI::App& app);
 void register_stretch(CLI::App& app);
 void register_version(CLI::App& app);
+void register_mesh(CLI::App& app);
 
 }  // namespace knitsim

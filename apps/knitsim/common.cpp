@@ -9,6 +9,7 @@
 #include "knit/io/export.hpp"
 #include "knit/io/states.hpp"
 #include "knit/model/params.hpp"
+#include "knit/scene/scene_objects.hpp"
 #include "knit/solver/interrupt.hpp"
 
 namespace knitsim {
@@ -97,7 +98,8 @@ void add_export_option(CLI::App* cmd, std::string& format) {
       ->check(CLI::IsMember({"usd", "obj", "bcc", "ply"}));
 }
 
-void export_run(const std::string& out_dir, const std::string& format) {
+void export_run(const std::string& out_dir, const std::string& format,
+                const std::vector<std::shared_ptr<const knit::SceneObject>>& objects) {
   namespace fs = std::filesystem;
   if (format.empty()) return;
   const fs::path dir(out_dir);
@@ -112,7 +114,7 @@ void export_run(const std::string& out_dir, const std::string& format) {
       frames.push_back(knit::read_state_file(p));
       times.push_back(frames.back().state.time);
     }
-    knit::export_usd(frames, times, (dir / "frames.usda").string());
+    knit::export_usd(frames, times, (dir / "frames.usda").string(), objects);
     std::cout << "exported " << frames.size() << " states to " << (dir / "frames.usda").string()
               << "\n";
     return;
@@ -173,10 +175,11 @@ std::string resume_command(const std::string& out_dir,
 }
 
 void finish_run(const knit::RunReport& report, const std::string& out_dir,
-                const std::string& export_format) {
+                const std::string& export_format,
+                const std::vector<std::shared_ptr<const knit::SceneObject>>& objects) {
   print_report(report, out_dir);
   end_if_interrupted(report);
-  export_run(out_dir, export_format);
+  export_run(out_dir, export_format, objects);
   if (report.status != knit::StepStatus::OK) throw RunFailed();
 }
 
@@ -188,6 +191,35 @@ void end_if_interrupted(const knit::RunReport& report) {
 
 void add_provenance(nlohmann::json& extra) {
   extra["command_line"] = command_line();
+}
+
+std::vector<std::shared_ptr<const knit::SceneObject>> objects_for(const std::string& input,
+                                                                  const std::string& scene,
+                                                                  bool no_objects) {
+  namespace fs = std::filesystem;
+  if (no_objects) return {};
+  if (!scene.empty()) return knit::load_scene_objects(scene);
+  if (input.empty()) return {};
+  const fs::path in = fs::absolute(input);
+  const fs::path dir = fs::is_directory(in) ? in : in.parent_path();
+  for (const fs::path& d : {dir, dir.parent_path()}) {
+    const fs::path summary = d / "summary.json";
+    if (!fs::is_regular_file(summary)) continue;
+    try {
+      const nlohmann::json s = knit::parse_json_file(summary.string());
+      if (!s.contains("scene") || !s["scene"].is_string()) return {};
+      const std::string path = s["scene"].get<std::string>();
+      if (!fs::is_regular_file(path)) return {};
+      auto objects = knit::load_scene_objects(path);
+      if (!objects.empty())
+        std::cout << "with the objects of " << path << " (named by " << summary.string()
+                  << "; --no-objects leaves them out)\n";
+      return objects;
+    } catch (const std::exception&) {
+      return {};  // not a simulation's summary, or its scene no longer parses: the yarn alone
+    }
+  }
+  return {};
 }
 
 }  // namespace knitsim

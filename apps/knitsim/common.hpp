@@ -39,7 +39,9 @@ std::unique_ptr<tbb::global_control> make_thread_control(int threads);
 void add_export_option(CLI::App* cmd, std::string& format);
 /// Exports a finished run: usd → DIR/frames.usda (every written state as time samples),
 /// obj|bcc|ply → DIR/final.<ext>. Nothing when `format` is empty.
-void export_run(const std::string& out_dir, const std::string& format);
+/// A scene's `objects` go into the USD beside the yarn.
+void export_run(const std::string& out_dir, const std::string& format,
+                const std::vector<std::shared_ptr<const knit::SceneObject>>& objects = {});
 /// One line per run: status, steps, time, where the outputs are.
 void print_report(const knit::RunReport& report, const std::string& out_dir);
 /// The command that resumes this command's run from OUT/final.kstate into OUT: this
@@ -50,7 +52,15 @@ std::string resume_command(const std::string& out_dir,
 /// Prints the report, exports, and ends the command as the run ended: returns when it was
 /// ok, throws RunInterrupted or RunFailed otherwise.
 void finish_run(const knit::RunReport& report, const std::string& out_dir,
-                const std::string& export_format);
+                const std::string& export_format,
+                const std::vector<std::shared_ptr<const knit::SceneObject>>& objects = {});
+/// The objects to draw or export with `input` (a state, or a directory of states): those
+/// of `scene` when given; none with `no_objects`; else those of the scene a simulation's
+/// summary.json beside the input names (in the input's directory or the one above it),
+/// with a note on stdout saying so.
+std::vector<std::shared_ptr<const knit::SceneObject>> objects_for(const std::string& input,
+                                                                  const std::string& scene,
+                                                                  bool no_objects);
 /// Throws RunInterrupted when the run was interrupted (after print_report).
 void end_if_interrupted(const knit::RunReport& report);
 /// Adds the summary's provenance fields (the command line) to `extra`.

@@ -12,6 +12,7 @@
 #include "knit/io/import.hpp"
 #include "knit/io/process.hpp"
 #include "knit/io/states.hpp"
+#include "knit/objects/mesh_shape.hpp"
 #include "knit/spline/fit.hpp"
 
 namespace knit {
@@ -251,6 +252,90 @@ TEST(ExportUsd, BlenderImportsIt) {
                  << " was built without USD support (as Debian's is): the .usda is checked by "
                     "the other ExportUsd tests only";
   EXPECT_EQ(rc, 0) << messages;
+}
+
+// An object's surface as OBJ opens in Blender as one closed mesh: every vertex, every edge
+// shared by two triangles (E = 3T/2), where the sphere is.
+TEST(ExportObjectMesh, BlenderImportsAClosedSurface) {
+  const std::string blender = find_executable("blender");
+  if (blender.empty()) {
+    if (blender_skip_requested()) GTEST_SKIP() << "KNIT_SKIP_BLENDER is set";
+    FAIL() << blender_missing_message();
+  }
+  const ShapePtr ball = make_sphere(Eigen::Vector3d(1, 2, 3), 2);
+  const TriangleMesh m = surface_mesh(
+      *ball, Eigen::AlignedBox3d(Eigen::Vector3d::Constant(-5), Eigen::Vector3d::Constant(8)),
+      0.25);
+  ASSERT_EQ(open_edges(m), 0);
+  const auto dir = test::temp_dir("mesh-blender");
+  const std::string obj = (dir / "ball.obj").string();
+  write_obj_mesh(m, obj);
+  const std::string script = std::string(
+                                 "import bpy, sys\n"
+                                 "bpy.ops.wm.read_factory_settings(use_empty=True)\n"
+                                 "bpy.ops.wm.obj_import(filepath=sys.argv[-1], forward_axis='Y', "
+                                 "up_axis='Z')\n") +
+                             BLENDER_MESH_REPORT;
+  int rc = 0;
+  std::string messages;
+  const auto meshes = parse_mesh_report(run_blender(blender, dir, script, obj, rc, messages));
+  ASSERT_EQ(rc, 0) << messages;
+  ASSERT_EQ(meshes.size(), 1u) << messages;
+  EXPECT_EQ(meshes[0].vertices, static_cast<long>(m.vertices.size()));
+  EXPECT_EQ(2 * meshes[0].edges, 3 * static_cast<long>(m.triangles.size()));
+  EXPECT_LT((meshes[0].lo - Eigen::Vector3d(-1, 0, 1)).cwiseAbs().maxCoeff(), 0.02);
+  EXPECT_LT((meshes[0].hi - Eigen::Vector3d(3, 4, 5)).cwiseAbs().maxCoeff(), 0.02);
+  std::filesystem::remove_all(dir);
+}
+
+// Objects in the USD: one Mesh prim each after the curves, its indices within its points,
+// a moving object's pose time-sampled with the curves.
+TEST(ExportUsd, ObjectsBecomeMeshPrimsWithTheirMotion) {
+  const StateFile a = test::state_of({test::helix_control_points()});
+  StateFile b = a;
+  b.state.time = 0.5;
+  auto ball = std::make_shared<SceneObject>();
+  ball->name = "ball";
+  ball->shape = make_sphere(Eigen::Vector3d::Zero(), 1);
+  Keyframe k0, k1;
+  k1.time = 1;
+  k1.translation = Eigen::Vector3d(4, 0, 0);
+  ball->keyframes = {k0, k1};
+  auto floor = std::make_shared<SceneObject>();
+  floor->name = "floor-1";
+  floor->shape = make_plane(Eigen::Vector3d(0, 0, -3), Eigen::Vector3d::UnitZ());
+  const std::string text = usda_text({a, b}, {0.0, 0.5}, {ball, floor});
+  ASSERT_NE(text.find("def Mesh \"object_ball\""), std::string::npos);
+  ASSERT_NE(text.find("def Mesh \"object_floor_1\""), std::string::npos) << "a valid prim name";
+  EXPECT_LT(text.find("def BasisCurves"), text.find("def Mesh"));
+  // the ball's prim: counts and indices agree, its translation moves 2 cm by t = 0.5 s
+  const size_t at = text.find("def Mesh \"object_ball\"");
+  const std::string prim = text.substr(at, text.find("def Mesh", at + 10) - at);
+  // (std::regex recurses per character: too deep for a prim of many thousand numbers)
+  auto list_after = [&](const std::string& key) {
+    const size_t k = prim.find(key);
+    EXPECT_NE(k, std::string::npos) << key;
+    const size_t open = prim.find('[', k + key.size()), close = prim.find(']', open);
+    return prim.substr(open + 1, close - open - 1);
+  };
+  const std::string c = list_after("faceVertexCounts = "), ix = list_after("faceVertexIndices = "),
+                    pts = list_after("point3f[] points = ");
+  const long faces = std::count(c.begin(), c.end(), '3');
+  const long n_idx = std::count(ix.begin(), ix.end(), ',') + 1;
+  const long n_pts = std::count(pts.begin(), pts.end(), '(');
+  EXPECT_GT(faces, 100);
+  EXPECT_EQ(n_idx, 3 * faces);
+  long max_index = 0;
+  std::istringstream in(ix);
+  for (std::string tok; std::getline(in, tok, ',');)
+    max_index = std::max(max_index, std::stol(tok));
+  EXPECT_LT(max_index, n_pts);
+  EXPECT_NE(prim.find("xformOp:translate.timeSamples"), std::string::npos);
+  EXPECT_NE(prim.find("1: (2, 0, 0)"), std::string::npos)
+      << prim.substr(prim.find("timeSamples"), 200);
+  // the floor does not move: no time samples
+  const std::string floor_prim = text.substr(text.find("def Mesh \"object_floor_1\""));
+  EXPECT_EQ(floor_prim.find("timeSamples"), std::string::npos);
 }
 
 TEST(ExportObj, RoundTripReproducesTheCurve) {

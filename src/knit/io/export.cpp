@@ -9,6 +9,7 @@
 
 #include "knit/io/bcc.hpp"
 #include "knit/io/states.hpp"
+#include "knit/objects/mesh_shape.hpp"
 
 namespace knit {
 namespace {
@@ -54,7 +55,88 @@ using detail::put;
 
 }  // namespace
 
-std::string usda_text(const std::vector<StateFile>& frames, const std::vector<double>& times) {
+namespace {
+
+// one Mesh prim per object, after the yarns (see export.hpp)
+void append_objects(std::string& out, const std::vector<StateFile>& frames,
+                    const std::vector<double>& times,
+                    const std::vector<Eigen::Matrix3Xd>& first_cps,
+                    const std::vector<std::shared_ptr<const SceneObject>>& objects) {
+  // the region a plane's slab covers: the first state's yarn, grown by its size
+  Eigen::AlignedBox3d yarn;
+  for (const Eigen::Matrix3Xd& cp : first_cps)
+    for (Eigen::Index k = 0; k < cp.cols(); ++k) yarn.extend(Eigen::Vector3d(cp.col(k)));
+  Eigen::AlignedBox3d region = yarn;
+  region.min() -= yarn.sizes() + Eigen::Vector3d::Constant(1.0);
+  region.max() += yarn.sizes() + Eigen::Vector3d::Constant(1.0);
+  for (const auto& o : objects) {
+    // the surface in the object's frame at the first time; its pose per frame
+    const ObjectFrame f0(*o, times.front());
+    Eigen::AlignedBox3d local;
+    for (int c = 0; c < 8; ++c)
+      local.extend(f0.rotation().transpose() *
+                   (region.corner(static_cast<Eigen::AlignedBox3d::CornerType>(c)) - f0.origin()));
+    const Eigen::AlignedBox3d bounds = local.intersection(o->shape->bounds());
+    const double size = bounds.sizes().allFinite() ? bounds.sizes().norm() : local.sizes().norm();
+    const TriangleMesh mesh = surface_mesh(*o->shape, local, size / 160);
+    // a USD prim name is [A-Za-z0-9_]*
+    std::string name = o->name;
+    for (char& c : name)
+      if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+    out += "    def Mesh \"object_" + name + "\"\n    {\n";
+    out += "        uniform bool doubleSided = 0\n";
+    out += "        color3f[] primvars:displayColor = [(0.6, 0.65, 0.7)]\n";
+    out += "        int[] faceVertexCounts = [";
+    for (size_t t = 0; t < mesh.triangles.size(); ++t) out += t ? ", 3" : "3";
+    out += "]\n        int[] faceVertexIndices = [";
+    for (size_t t = 0; t < mesh.triangles.size(); ++t)
+      for (int c = 0; c < 3; ++c) {
+        if (t || c) out += ", ";
+        out += std::to_string(mesh.triangles[t][c]);
+      }
+    out += "]\n        point3f[] points = [";
+    for (size_t v = 0; v < mesh.vertices.size(); ++v) {
+      if (v) out += ", ";
+      append_point(out, mesh.vertices[v]);
+    }
+    out += "]\n        uniform token subdivisionScheme = \"none\"\n";
+    auto pose = [&](double time, std::string& translate, std::string& orient) {
+      const ObjectFrame f(*o, time);
+      translate.clear();
+      orient.clear();
+      append_point(translate, f.origin());
+      const Eigen::Quaterniond q(f.rotation());
+      orient = "(";
+      append_float(orient, q.w());
+      for (double c : {q.x(), q.y(), q.z()}) {
+        orient += ", ";
+        append_float(orient, c);
+      }
+      orient += ")";
+    };
+    std::string tr, ori;
+    pose(times.front(), tr, ori);
+    out += "        double3 xformOp:translate = " + tr + "\n";
+    out += "        quatf xformOp:orient = " + ori + "\n";
+    if (o->moving() && frames.size() > 1) {
+      std::string trs, oris;
+      for (size_t f = 0; f < frames.size(); ++f) {
+        pose(times[f], tr, ori);
+        trs += "            " + std::to_string(f) + ": " + tr + ",\n";
+        oris += "            " + std::to_string(f) + ": " + ori + ",\n";
+      }
+      out += "        double3 xformOp:translate.timeSamples = {\n" + trs + "        }\n";
+      out += "        quatf xformOp:orient.timeSamples = {\n" + oris + "        }\n";
+    }
+    out += "        uniform token[] xformOpOrder = [\"xformOp:translate\", \"xformOp:orient\"]\n";
+    out += "    }\n";
+  }
+}
+
+}  // namespace
+
+std::string usda_text(const std::vector<StateFile>& frames, const std::vector<double>& times,
+                      const std::vector<std::shared_ptr<const SceneObject>>& objects) {
   if (frames.empty()) throw std::invalid_argument("USD export: no states");
   if (times.size() != frames.size())
     throw std::invalid_argument("USD export: " + std::to_string(times.size()) + " times for " +
@@ -120,13 +202,15 @@ std::string usda_text(const std::vector<StateFile>& frames, const std::vector<do
     }
     out += "    }\n";
   }
+  append_objects(out, frames, times, cps[0], objects);
   out += "}\n";
   return out;
 }
 
 void export_usd(const std::vector<StateFile>& frames, const std::vector<double>& times,
-                const std::string& path) {
-  write_file_atomic(path, usda_text(frames, times));
+                const std::string& path,
+                const std::vector<std::shared_ptr<const SceneObject>>& objects) {
+  write_file_atomic(path, usda_text(frames, times, objects));
 }
 
 std::string obj_text(const StateFile& state, int per_segment) {

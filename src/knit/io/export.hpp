@@ -5,13 +5,18 @@
 //   USD (.usda text)  exact curves: one BasisCurves prim per yarn (cubic, bspline,
 //                     nonperiodic), control points as `points`, widths = 2r; a sequence of
 //                     states becomes one file with time samples. Z up, 1 unit = 1 cm.
+//                     A scene's solid objects follow as one Mesh prim each (their surface,
+//                     triangulated in the object's frame; a plane as a slab around the
+//                     yarn), placed by translate and orient ops, time-sampled when they move.
 //   OBJ               polylines (`v`, and `l` for each span), splines sampled densely.
 //   BCC               Cem Yuksel's binary curve collection, PL (polyline) curves.
 //   PLY               points and edges (binary little-endian or ascii), e.g. for ParaView.
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "knit/io/state_file.hpp"
+#include "knit/objects/object.hpp"
 
 namespace knit {
 
@@ -22,9 +27,12 @@ inline constexpr int EXPORT_SAMPLES_PER_SEGMENT = 8;
 /// frame the points are plain values; with several, time samples (time code = frame
 /// index; timeCodesPerSecond from the mean frame spacing). All frames need the same yarn
 /// layout. Throws std::invalid_argument otherwise.
-std::string usda_text(const std::vector<StateFile>& frames, const std::vector<double>& times);
+/// `objects` (a scene's) are written after the yarns.
+std::string usda_text(const std::vector<StateFile>& frames, const std::vector<double>& times,
+                      const std::vector<std::shared_ptr<const SceneObject>>& objects = {});
 void export_usd(const std::vector<StateFile>& frames, const std::vector<double>& times,
-                const std::string& path);
+                const std::string& path,
+                const std::vector<std::shared_ptr<const SceneObject>>& objects = {});
 
 /// OBJ polylines: one object per yarn, `per_segment` samples per spline segment.
 std::string obj_text(const StateFile& state, int per_segment = EXPORT_SAMPLES_PER_SEGMENT);

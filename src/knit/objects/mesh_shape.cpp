@@ -274,7 +274,7 @@ TriangleMesh object_surface(const SceneObject& object, double time,
 
 void write_obj_mesh(const TriangleMesh& mesh, const std::string& path) {
   std::ostringstream out;
-  out.precision(7);
+  out.precision(6);
   out << "# knitsim object surface (cm)\n";
   for (const Eigen::Vector3d& v : mesh.vertices)
     out << "v " << v[0] << ' ' << v[1] << ' ' << v[2] << '\n';

@@ -224,4 +224,12 @@ std::vector<std::shared_ptr<const SceneObject>> parse_objects(const JsonReader& 
   return out;
 }
 
+std::vector<std::shared_ptr<const SceneObject>> load_scene_objects(const std::string& path) {
+  const nlohmann::json doc = parse_json_file(path);
+  const JsonReader root(doc, path);
+  root.require_object();
+  if (!root.has("objects")) return {};
+  return parse_objects(root.at("objects"), path);
+}
+
 }  // namespace knit

@@ -19,4 +19,8 @@ inline constexpr int MAX_SCENE_OBJECTS = 64;
 std::vector<std::shared_ptr<const SceneObject>> parse_objects(const JsonReader& list,
                                                               const std::string& scene_path);
 
+/// The objects of a scene file alone (none when it has no "objects"), without reading its
+/// yarns or knits: for drawing and exporting them.
+std::vector<std::shared_ptr<const SceneObject>> load_scene_objects(const std::string& path);
+
 }  // namespace knit
