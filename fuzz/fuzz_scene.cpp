@@ -36,9 +36,25 @@ void confine(nlohmann::json& path) {
     path = "missing";
 }
 
-// every place a scene names a file: knits[i].state, yarns[i].import, yarns[i].import.path
+// a mesh's path anywhere in an object's shape (unions nest)
+void confine_meshes(nlohmann::json& shape, int depth) {
+  if (depth > 64) return;
+  if (shape.is_array()) {
+    for (auto& item : shape) confine_meshes(item, depth + 1);
+    return;
+  }
+  if (!shape.is_object()) return;
+  for (auto& [key, value] : shape.items()) {
+    if (key == "mesh" && value.is_object() && value.contains("path")) confine(value["path"]);
+    confine_meshes(value, depth + 1);
+  }
+}
+
+// every place a scene names a file: knits[i].state, yarns[i].import, yarns[i].import.path,
+// objects[i]…mesh.path
 void confine_paths(nlohmann::json& doc) {
   if (!doc.is_object()) return;
+  if (doc.contains("objects")) confine_meshes(doc["objects"], 0);
   for (const char* list : {"knits", "yarns"}) {
     if (!doc.contains(list) || !doc[list].is_array()) continue;
     for (auto& item : doc[list]) {

@@ -172,5 +172,16 @@ TEST(ObjectScenes, AMovingSpherePushesAYarnAlongItsOwnDirection) {
   }
 }
 
+TEST(ObjectScenes, AYarnStartingInsideAnObjectIsRefusedNamingIt) {
+  Scene scene = scene_from({{"yarns", {line({-3, 0, 0.5}, {3, 0, 0.5}, 12)}},
+                            {"objects", {{{"name", "rock"}, {"sphere", {{"radius", 1.0}}}}}}});
+  try {
+    simulate_scene(scene, SimulateOptions{});
+    FAIL() << "a yarn through a sphere was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("inside object \"rock\""), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace knit

@@ -193,6 +193,30 @@ void check_start(Simulator& sim, const State& state) {
     }
     throw std::invalid_argument(msg.str());
   }
+  // a yarn whose centreline starts inside a solid object would be thrown out of it by the
+  // penalty (or pushed out slowly by the filter) through whatever is in the way
+  for (const auto& object : model.objects) {
+    const ObjectFrame frame(*object, state.time);
+    for (int i = 0; i < model.num_seg(); ++i) {
+      Eigen::Vector3d centre;
+      double rho;
+      segment_ball(model, state.q, i, centre, rho);
+      if (frame.ball_outside(centre, rho, 0)) continue;
+      for (int k = 0; k <= 8; ++k) {
+        const Eigen::Vector3d y = point_position(model, state.q, {i, k / 8.0});
+        const double phi = frame.distance(y, nullptr);
+        if (phi < 0) {
+          const int yarn = model.seg_yarn[i];
+          std::ostringstream msg;
+          msg << "segment " << i - model.yarns[yarn].seg_begin << " of yarn " << yarn
+              << " starts inside object \"" << object->name << "\" (" << std::setprecision(3)
+              << -phi << " cm below its surface, at (" << y.x() << ", " << y.y() << ", " << y.z()
+              << ")): place the yarn outside the objects";
+          throw std::invalid_argument(msg.str());
+        }
+      }
+    }
+  }
 }
 
 RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {

@@ -65,7 +65,8 @@ struct RunReport {
 RunReport run_simulation(Simulator& sim, State& state, const RunOptions& options);
 
 /// Evaluates the forces at `state` and throws std::invalid_argument when yarns start
-/// inside each other (closer than 5 % of a yarn diameter), naming the yarns and segments.
+/// inside each other (closer than 5 % of a yarn diameter), naming the yarns and segments,
+/// or when a yarn's centreline starts inside a solid object, naming the object.
 /// run_simulation calls it; recipes call it before they write anything.
 void check_start(Simulator& sim, const State& state);
 
