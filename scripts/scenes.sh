@@ -42,6 +42,9 @@ last_frame() { ls "$1"/frames/*.kstate 2>/dev/null | sort | tail -n 1; }
 # 1. the relaxed knit
 if [ ! -f "$relax_dir/relaxed.kstate" ]; then
   frame=$(last_frame "$relax_dir" || true)
+  if [ -f "$relax_dir/summary.json" ] && grep -q '"status": "interrupted"' "$relax_dir/summary.json"; then
+    frame=$relax_dir/final.kstate
+  fi
   if [ -n "$frame" ]; then
     left=$(awk -v t="$(last_time "$relax_dir")" -v T=$relax_time 'BEGIN { l = T - t; print (l > 1e-6 ? l : 1e-6) }')
     echo "scenes: relaxation goes on from $frame ($left s left)"
@@ -61,6 +64,10 @@ if [ -f "$run_dir/summary.json" ] && grep -q '"status": "ok"' "$run_dir/summary.
   echo "scenes: $run_dir is done"
 else
   frame=$(last_frame "$run_dir" || true)
+  # an interrupted run (Ctrl-C, SIGTERM) left its last state in final.kstate
+  if [ -f "$run_dir/summary.json" ] && grep -q '"status": "interrupted"' "$run_dir/summary.json"; then
+    frame=$run_dir/final.kstate
+  fi
   if [ -n "$frame" ]; then
     echo "scenes: the run goes on from $frame"
     $k simulate "$file" --knit "$knit" --resume "$frame" -j "$threads" -q --out "$run_dir"
