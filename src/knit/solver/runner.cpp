@@ -287,6 +287,7 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
 
   RunReport report;
   const auto t0 = Clock::now();
+  const double start_time = state.time;
   auto last_progress = t0;
   auto last_output = t0;
   long long last_output_step = 0;
@@ -450,6 +451,8 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
         "shortened to end at the time asked";
   }
   s["wall_time_s"] = wall;
+  // wall seconds per simulated second of this run (not counting what a resumed run did)
+  if (state.time > start_time) s["wall_s_per_simulated_s"] = wall / (state.time - start_time);
   s["threads"] = std::min<size_t>(
       tbb::this_task_arena::max_concurrency(),
       tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
