@@ -301,10 +301,11 @@ Image render_state(const StateFile& state, const RenderOptions& opt) {
     rtcReleaseGeometry(geom);
   }
   if (!opt.objects.empty()) {
-    // the objects' surfaces at the state's time, within the frame grown by half its size
+    // the objects' surfaces at the state's time, within the frame grown by half its
+    // largest side in every direction (a floor is drawn as a square slab under a tall knit)
     Eigen::AlignedBox3d region = frame;
-    region.min() -= 0.5 * frame.sizes();
-    region.max() += 0.5 * frame.sizes();
+    region.min().array() -= 0.5 * frame.sizes().maxCoeff();
+    region.max().array() += 0.5 * frame.sizes().maxCoeff();
     std::vector<float> vertices;
     std::vector<unsigned> indices;
     for (const auto& o : opt.objects) {

@@ -69,7 +69,8 @@ struct RenderOptions {
   /// an animation or every panel of a comparison so their scale matches).
   std::optional<Eigen::AlignedBox3d> frame;
   /// Solid objects drawn under the yarn at the state's time (their surfaces where they lie
-  /// within the framed box grown by half its size: a plane is drawn as a slab that wide).
+  /// within the framed box grown by half its largest side: a plane is drawn as a slab that
+  /// wide).
   std::vector<std::shared_ptr<const SceneObject>> objects;
 };
 
