@@ -12,6 +12,7 @@
 #include "knit/objects/mesh_shape.hpp"
 #include "knit/objects/object.hpp"
 #include "knit/objects/shape.hpp"
+#include "knit/scene/scene_objects.hpp"
 
 namespace knit {
 namespace {
@@ -249,6 +250,44 @@ TEST(MeshShape, SurfacesOfShapesAreClosedOutwardAndOnTheSurface) {
   double top = -1e9;
   for (const Vector3d& v : pm.vertices) top = std::max(top, v.z());
   EXPECT_NEAR(top, 0, 1e-6);
+}
+
+}  // namespace
+}  // namespace knit
+
+namespace knit {
+namespace {
+
+// The leg warmer's foot ships twice: as a smooth union (examples/leg_warmer.json) and as
+// the OBJ mesh written from it (examples/meshes/foot.obj, used by leg_warmer_mesh.json).
+// The mesh path must give the same solid: closed, and its distance grid within a fraction
+// of the mesh's 0.4 cm sampling of the union's φ near the surface.
+TEST(MeshShape, TheShippedFootMeshIsTheFootShape) {
+  const auto shapes = load_scene_objects(std::string(KNIT_EXAMPLES) + "/leg_warmer.json");
+  const auto meshes = load_scene_objects(std::string(KNIT_EXAMPLES) + "/leg_warmer_mesh.json");
+  ASSERT_EQ(shapes.size(), 1u);
+  ASSERT_EQ(meshes.size(), 1u);
+  EXPECT_EQ(shapes[0]->shape->kind(), "smooth_union");
+  EXPECT_EQ(meshes[0]->shape->kind(), "mesh");
+  const TriangleMesh foot = read_obj_mesh(std::string(KNIT_EXAMPLES) + "/meshes/foot.obj");
+  EXPECT_EQ(open_edges(foot), 0);
+  std::mt19937 rng(5);
+  double worst = 0;
+  int near_surface = 0;
+  for (const Eigen::Vector3d& v : foot.vertices) {
+    if (rng() % 20 != 0) continue;  // 1 vertex in 20
+    worst = std::max(worst, std::abs(shapes[0]->shape->distance(v, nullptr)));
+    // just off the surface, where the yarn meets it
+    Vector3d g;
+    shapes[0]->shape->distance(v, &g);
+    const Vector3d x = v + 0.1 * g.normalized();
+    EXPECT_NEAR(meshes[0]->shape->distance(x, nullptr), shapes[0]->shape->distance(x, nullptr),
+                0.05)
+        << x.transpose();
+    ++near_surface;
+  }
+  EXPECT_GT(near_surface, 300);
+  EXPECT_LT(worst, 0.05) << "the mesh's vertices lie on the union's surface";
 }
 
 }  // namespace
