@@ -51,7 +51,8 @@ int main(int argc, char** argv) {
     t_with.push_back(run(*with, s_with));
     t_without.push_back(run(*without, s_without));
   }
-  for (const auto& [name, sec] : with->data().stage_seconds) stages[name + "_ms_per_step"] = 1e3 * sec / steps;
+  for (const auto& [name, sec] : with->data().stage_seconds)
+    stages[name + "_ms_per_step"] = 1e3 * sec / steps;
   const double a = knit::bench::median(t_with), b = knit::bench::median(t_without);
   long long points = 0;
   for (const knit::ObjectRecord& o : with->data().objects) points += o.points_in_contact;

@@ -303,7 +303,8 @@ std::vector<std::string> plot_log(const std::string& dir) {
       body += (g == 1 ? quoted(fdat) : std::string(", ''")) + " u 1:" + std::to_string(g + 1) +
               " w l ls " + std::to_string((g - 1) % 6 + 1) + " t " +
               quoted("|F| " + forces.columns[g]) + " noenhanced";
-    render_plot(gnuplot, tmp, out("forces.png"), "Forces of constraints and objects on the yarn", body + "\n");
+    render_plot(gnuplot, tmp, out("forces.png"), "Forces of constraints and objects on the yarn",
+                body + "\n");
     written.push_back(out("forces.png"));
   }
   return written;

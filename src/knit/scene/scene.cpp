@@ -511,8 +511,9 @@ Scene load_scene_with_knit(const std::string& path, const std::string& kstate_pa
   nlohmann::json doc = parse_json_file(path);
   if (!doc.is_object() || !doc.contains("knits") || !doc["knits"].is_array() ||
       doc["knits"].size() != 1 || !doc["knits"][0].is_object())
-    throw InputError(path + ": knits: a knit given on the command line replaces the scene's one "
-                            "knit, and this scene has none or several");
+    throw InputError(path +
+                     ": knits: a knit given on the command line replaces the scene's one "
+                     "knit, and this scene has none or several");
   doc["knits"][0]["state"] = std::filesystem::absolute(kstate_path).string();
   try {
     return parse_scene(doc, path);
