@@ -21,7 +21,7 @@ void CollisionFilter::apply(const Model& model, const Eigen::VectorXd& q, Eigen:
                             double time, double h) {
   m_h = h;
   m_changed = false;
-  std::fill(m_last.begin(), m_last.end(), PerObject{});
+  std::fill(m_last.begin(), m_last.end(), ObjectContacts{});
   if (m_objects.empty()) return;
   const double r = model.params.material.radius;
   const int per = m_samples.samples_per_segment();
@@ -31,7 +31,8 @@ void CollisionFilter::apply(const Model& model, const Eigen::VectorXd& q, Eigen:
 
   // segments whose ball comes within r of some object
   const int nseg = model.num_seg();
-  std::vector<char> near(nseg, 0);
+  std::vector<char>& near = m_is_near;
+  near.assign(nseg, 0);
   tbb::parallel_for(tbb::blocked_range<int>(0, nseg, 256), [&](const tbb::blocked_range<int>& b) {
     for (int i = b.begin(); i < b.end(); ++i) {
       Eigen::Vector3d centre;
@@ -83,7 +84,7 @@ void CollisionFilter::apply(const Model& model, const Eigen::VectorXd& q, Eigen:
   });
   for (size_t blk = 0; blk < nblocks; ++blk)
     for (const Hit& hit : m_blocks[blk]) {
-      PerObject& st = m_last[hit.object];
+      ObjectContacts& st = m_last[hit.object];
       ++st.points;
       st.deepest = std::max(st.deepest, hit.depth);
     }
@@ -127,7 +128,7 @@ void CollisionFilter::apply(const Model& model, const Eigen::VectorXd& q, Eigen:
       }
     });
     for (size_t b = 0; b < nblocks; ++b)
-      for (int o = 0; o < nobj; ++o) m_last[o].impulse += impulse[b * nobj + o];
+      for (int o = 0; o < nobj; ++o) m_last[o].push += impulse[b * nobj + o];
     m_changed_segments.clear();
     for (size_t j = 0; j < m_near.size(); ++j)
       if (changed[j]) m_changed_segments.push_back(m_near[j]);
@@ -152,12 +153,7 @@ bool CollisionFilter::adjust_positions(const Model& model, Eigen::VectorXd& q) c
 }
 
 void CollisionFilter::record(StepData& data) const {
-  for (size_t o = 0; o < m_objects.size(); ++o) {
-    ObjectRecord& rec = data.objects[m_objects[o]];
-    rec.points_in_contact += m_last[o].points;
-    rec.deepest_penetration = std::max(rec.deepest_penetration, m_last[o].deepest);
-    if (m_h > 0) rec.force += m_last[o].impulse / m_h;
-  }
+  record_contacts(m_objects, m_last, m_h > 0 ? 1.0 / m_h : 0.0, data);
 }
 
 }  // namespace knit

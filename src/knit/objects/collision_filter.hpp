@@ -28,6 +28,7 @@
 
 #include "knit/filters/sample_segments.hpp"
 #include "knit/filters/velocity_filter.hpp"
+#include "knit/objects/object.hpp"
 
 namespace knit {
 
@@ -49,15 +50,11 @@ class CollisionFilter : public VelocityFilter {
  private:
   std::vector<int> m_objects;
   SampleSegments m_samples;
-  struct PerObject {
-    long long points = 0;
-    double deepest = 0;
-    Eigen::Vector3d impulse = Eigen::Vector3d::Zero();
-  };
-  std::vector<PerObject> m_last;
+  std::vector<ObjectContacts> m_last;  // per entry of m_objects; push = impulse (g cm/s)
   double m_h = 0;
   // scratch
-  std::vector<int> m_near;  // segments near some filter object
+  std::vector<char> m_is_near;  // scratch, per segment
+  std::vector<int> m_near;      // segments near some filter object
   // a sample point within r of an object's surface
   struct Hit {
     int sample = 0;  // global sample index

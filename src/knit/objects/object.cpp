@@ -1,5 +1,6 @@
 #include "knit/objects/object.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace knit {
@@ -11,6 +12,16 @@ ObjectFrame::ObjectFrame(const SceneObject& o, double time) : m_shape(o.shape.ge
   m_to_local = m_to_world.transpose();
   keyframe_rates(o.keyframes, time, m_velocity, m_omega);
   m_lipschitz = m_shape->lipschitz();
+}
+
+void record_contacts(const std::vector<int>& objects, const std::vector<ObjectContacts>& contacts,
+                     double force_scale, StepData& data) {
+  for (size_t k = 0; k < objects.size(); ++k) {
+    ObjectRecord& rec = data.objects[objects[k]];
+    rec.points_in_contact += contacts[k].points;
+    rec.deepest_penetration = std::max(rec.deepest_penetration, contacts[k].deepest);
+    rec.force += force_scale * contacts[k].push;
+  }
 }
 
 void segment_ball(const Model& model, const Eigen::VectorXd& q, int segment,

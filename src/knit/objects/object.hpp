@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "knit/model/model.hpp"
+#include "knit/model/step_data.hpp"
 #include "knit/objects/shape.hpp"
 
 namespace knit {
@@ -76,6 +77,25 @@ class ObjectFrame {
   Eigen::Vector3d m_velocity, m_omega;
   double m_lipschitz;
 };
+
+/// What one collision mechanism (the penalty term or the collision filter) found against
+/// one object: yarn points within r of its surface, the deepest overlap r − φ (cm), and
+/// what it exerted on the yarn: a force (dyn) or an impulse (g cm/s).
+struct ObjectContacts {
+  long long points = 0;
+  double deepest = 0;
+  Eigen::Vector3d push = Eigen::Vector3d::Zero();
+  void add(const ObjectContacts& other) {
+    points += other.points;
+    deepest = std::max(deepest, other.deepest);
+    push += other.push;
+  }
+};
+
+/// Adds `contacts[k]`, found against model object `objects[k]`, into data.objects, their
+/// push times `force_scale` (1 for a force, 1/h for an impulse over a step of h).
+void record_contacts(const std::vector<int>& objects, const std::vector<ObjectContacts>& contacts,
+                     double force_scale, StepData& data);
 
 /// Centre and radius (cm) of a ball holding segment i's centreline: the centroid of its 4
 /// control points and their largest distance from it (the curve lies in the control

@@ -20,7 +20,7 @@ double ObjectPenalty::add_force(const Model& model, const Eigen::VectorXd& q,
   const QuadratureTable& quad = model.quad;
   std::vector<ObjectFrame> frames;
   for (int k : m_objects) frames.emplace_back(*model.objects[k], time);
-  for (auto& stats : m_seg_stats) stats.assign(model.num_seg(), PerObject{});
+  for (auto& stats : m_seg_stats) stats.assign(model.num_seg(), ObjectContacts{});
   const double energy = m_acc.run(model, [&](int i, Vector12d& slot) {
     Eigen::Vector3d centre;
     double rho;
@@ -33,7 +33,7 @@ double ObjectPenalty::add_force(const Model& model, const Eigen::VectorXd& q,
       const ObjectFrame& f = frames[o];
       if (f.ball_outside(centre, rho, r)) continue;
       const SceneObject& obj = *model.objects[m_objects[o]];
-      PerObject& st = m_seg_stats[o][i];
+      ObjectContacts& st = m_seg_stats[o][i];
       for (int p = 0; p < quad.size(); ++p) {
         const Eigen::Vector3d y = combine(x, quad.b[p]);
         Eigen::Vector3d grad;
@@ -50,7 +50,7 @@ double ObjectPenalty::add_force(const Model& model, const Eigen::VectorXd& q,
           g += obj.damping * wl * n.dot(w) * n;
         }
         scatter(slot, quad.b[p], -g);
-        st.force -= g;
+        st.push -= g;
         ++st.points;
         st.deepest = std::max(st.deepest, -gap);
       }
@@ -59,24 +59,14 @@ double ObjectPenalty::add_force(const Model& model, const Eigen::VectorXd& q,
   });
   m_acc.gather(model, force, 1.0);
   for (size_t o = 0; o < m_objects.size(); ++o) {
-    PerObject total;
-    for (const PerObject& st : m_seg_stats[o]) {
-      total.points += st.points;
-      total.deepest = std::max(total.deepest, st.deepest);
-      total.force += st.force;
-    }
-    m_last[o] = total;
+    m_last[o] = ObjectContacts{};
+    for (const ObjectContacts& st : m_seg_stats[o]) m_last[o].add(st);
   }
   return energy;
 }
 
 void ObjectPenalty::record(StepData& data) const {
-  for (size_t o = 0; o < m_objects.size(); ++o) {
-    ObjectRecord& rec = data.objects[m_objects[o]];
-    rec.points_in_contact += m_last[o].points;
-    rec.deepest_penetration = std::max(rec.deepest_penetration, m_last[o].deepest);
-    rec.force += m_last[o].force;
-  }
+  record_contacts(m_objects, m_last, 1.0, data);
 }
 
 }  // namespace knit

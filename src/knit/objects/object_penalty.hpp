@@ -21,6 +21,7 @@
 
 #include "knit/energy/segment_accumulator.hpp"
 #include "knit/energy/term.hpp"
+#include "knit/objects/object.hpp"
 
 namespace knit {
 
@@ -40,13 +41,8 @@ class ObjectPenalty : public Term {
  private:
   std::vector<int> m_objects;
   SegmentAccumulator m_acc;
-  struct PerObject {
-    long long points = 0;
-    double deepest = 0;
-    Eigen::Vector3d force = Eigen::Vector3d::Zero();
-  };
-  std::vector<PerObject> m_last;                    // per entry of m_objects
-  std::vector<std::vector<PerObject>> m_seg_stats;  // scratch: per object, per segment
+  std::vector<ObjectContacts> m_last;  // per entry of m_objects; push = force (dyn)
+  std::vector<std::vector<ObjectContacts>> m_seg_stats;  // scratch: per object, per segment
 };
 
 }  // namespace knit

@@ -158,15 +158,6 @@ YarnPoint parse_point(const JsonReader& r, const ModelBuilder& b, bool allow_at)
   return {nseg + seg, t};
 }
 
-// the rotation {"axis": [x,y,z], "degrees": a}
-Eigen::Quaterniond parse_rotation(const JsonReader& r) {
-  r.allow_keys({"axis", "degrees"});
-  const Eigen::Vector3d axis = r.at("axis").vec3();
-  if (!(axis.norm() > 0)) r.at("axis").fail("the rotation axis must not be zero");
-  const double degrees = r.at("degrees").number();
-  return Eigen::Quaterniond(Eigen::AngleAxisd(degrees * M_PI / 180, axis.normalized()));
-}
-
 // a relaxed knit from a .kstate, placed by "translate" and "rotate" (about the origin,
 // rotation first); it starts at rest
 struct PlacedKnit {
@@ -281,6 +272,18 @@ void parse_clamp_points(const JsonReader& c, const ModelBuilder& b,
   clamp.control_points = std::move(cps);
 }
 
+}  // namespace
+
+Eigen::Quaterniond parse_rotation(const JsonReader& r) {
+  r.allow_keys({"axis", "degrees"});
+  const Eigen::Vector3d axis = r.at("axis").vec3();
+  if (!(axis.norm() > 0)) r.at("axis").fail("the rotation axis must not be zero");
+  const double degrees = r.at("degrees").number();
+  if (!(std::abs(degrees) <= 1e6))
+    r.at("degrees").fail("expected at most 1e+06 degrees either way");
+  return Eigen::Quaterniond(Eigen::AngleAxisd(degrees * M_PI / 180, axis.normalized()));
+}
+
 std::vector<Keyframe> parse_keyframes(const JsonReader& r) {
   r.require_array(1);
   std::vector<Keyframe> frames;
@@ -289,12 +292,31 @@ std::vector<Keyframe> parse_keyframes(const JsonReader& r) {
     f.allow_keys({"time", "translate", "rotate"});
     Keyframe kf;
     kf.time = f.at("time").positive(true);
+    if (!(kf.time <= MAX_DURATION))
+      f.at("time").fail("expected a time of at most " + short_number(MAX_DURATION) + " s");
     if (k > 0 && !(kf.time > frames.back().time)) f.at("time").fail("keyframe times must increase");
-    if (f.has("translate")) kf.translation = f.at("translate").vec3();
+    if (f.has("translate")) {
+      kf.translation = f.at("translate").vec3();
+      if (!(kf.translation.cwiseAbs().maxCoeff() <= 1e6))
+        f.at("translate").fail("expected coordinates within ±1e+06 cm");
+    }
     if (f.has("rotate")) kf.rotation = parse_rotation(f.at("rotate"));
     frames.push_back(kf);
   }
   return frames;
+}
+
+namespace {
+
+// parse_scene with the file named in every message
+Scene parse_scene_file(const nlohmann::json& doc, const std::string& path) {
+  try {
+    return parse_scene(doc, path);
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw InputError(path + ": " + e.what());
+  }
 }
 
 }  // namespace
@@ -515,24 +537,11 @@ Scene load_scene_with_knit(const std::string& path, const std::string& kstate_pa
                      ": knits: a knit given on the command line replaces the scene's one "
                      "knit, and this scene has none or several");
   doc["knits"][0]["state"] = std::filesystem::absolute(kstate_path).string();
-  try {
-    return parse_scene(doc, path);
-  } catch (const InputError&) {
-    throw;
-  } catch (const std::exception& e) {
-    throw InputError(path + ": " + e.what());
-  }
+  return parse_scene_file(doc, path);
 }
 
 Scene load_scene(const std::string& path) {
-  const nlohmann::json doc = parse_json_file(path);
-  try {
-    return parse_scene(doc, path);
-  } catch (const InputError&) {
-    throw;
-  } catch (const std::exception& e) {
-    throw InputError(path + ": " + e.what());
-  }
+  return parse_scene_file(parse_json_file(path), path);
 }
 
 }  // namespace knit

@@ -28,6 +28,12 @@ struct Scene {
   std::vector<SceneKnit> knits;
 };
 
+/// A rotation {"axis": [x, y, z], "degrees": a} (a non-zero axis, |a| ≤ 1e6).
+Eigen::Quaterniond parse_rotation(const JsonReader& reader);
+/// Keyframes [{"time": t, "translate": [x, y, z], "rotate": {…}}, …]: at least one, times
+/// in [0, MAX_DURATION] and increasing, translations within ±1e6 cm (clamps and objects).
+std::vector<Keyframe> parse_keyframes(const JsonReader& reader);
+
 /// Reads `params` (every key optional) over `base`.
 Params parse_params(const JsonReader& reader, Params base);
 /// Parses a scene document; `source` names it in error messages (and relative paths in it

@@ -5,6 +5,7 @@
 
 #include "knit/model/params.hpp"
 #include "knit/objects/mesh_shape.hpp"
+#include "knit/scene/scene.hpp"
 
 namespace knit {
 
@@ -41,14 +42,6 @@ double in_range(const JsonReader& r, double lo, double hi, const char* unit) {
     r.fail("expected a value in [" + short_number(lo) + ", " + short_number(hi) + "] " + unit +
            ", got " + short_number(x));
   return x;
-}
-
-Eigen::Quaterniond rotation(const JsonReader& r) {
-  r.allow_keys({"axis", "degrees"});
-  const Eigen::Vector3d axis = r.at("axis").vec3();
-  if (!(axis.norm() > 0)) r.at("axis").fail("the rotation axis must not be zero");
-  const double degrees = in_range(r.at("degrees"), -1e6, 1e6, "degrees");
-  return Eigen::Quaterniond(Eigen::AngleAxisd(degrees * M_PI / 180, axis.normalized()));
 }
 
 // the one shape key of `r` (an object or a union member)
@@ -175,22 +168,8 @@ std::vector<std::shared_ptr<const SceneObject>> parse_objects(const JsonReader& 
         r.at("name").fail("two objects are called \"" + obj->name + "\"");
     obj->shape = parse_shape(r, scene_path, 0);
     if (r.has("position")) obj->position = point(r.at("position"));
-    if (r.has("rotate")) obj->rotation = rotation(r.at("rotate"));
-    if (r.has("keyframes")) {
-      const JsonReader frames = r.at("keyframes");
-      frames.require_array(1);
-      for (size_t f = 0; f < frames.size(); ++f) {
-        const JsonReader fr = frames.at(f);
-        fr.allow_keys({"time", "translate", "rotate"});
-        Keyframe kf;
-        kf.time = in_range(fr.at("time"), 0, MAX_DURATION, "s");
-        if (f > 0 && !(kf.time > obj->keyframes.back().time))
-          fr.at("time").fail("keyframe times must increase");
-        if (fr.has("translate")) kf.translation = point(fr.at("translate"));
-        if (fr.has("rotate")) kf.rotation = rotation(fr.at("rotate"));
-        obj->keyframes.push_back(kf);
-      }
-    }
+    if (r.has("rotate")) obj->rotation = parse_rotation(r.at("rotate"));
+    if (r.has("keyframes")) obj->keyframes = parse_keyframes(r.at("keyframes"));
     if (r.has("mechanism")) {
       const std::string m = r.at("mechanism").string();
       if (m != "filter" && m != "penalty" && m != "both")
