@@ -313,3 +313,35 @@ TEST(Cli, StretchRunsAndPlotsSeveralRuns) {
 }
 
 }  // namespace
+
+namespace {
+
+// The object commands and options refuse what they cannot do, naming it, and write nothing.
+TEST(Cli, ObjectCommandsRefuseBadRequests) {
+  const std::string ex = KNIT_EXAMPLES;
+  const std::string dir = temp_dir("cli_objects");
+  std::filesystem::create_directories(dir);
+  Result r = run("mesh " + ex + "/drape_sphere.json --object nope --out " + dir + "/x.obj");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.output.find("no such object (it has ball, floor)"), std::string::npos) << r.output;
+  r = run("mesh " + ex + "/drape_sphere.json --object floor --out " + dir + "/x.obj");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.output.find("unbounded"), std::string::npos) << r.output;
+  r = run("mesh " + ex + "/drape_sphere.json --object ball --out " + dir + "/x.stl");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.output.find(".obj"), std::string::npos) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/x.obj"));
+  // a knit given on the command line needs a scene with one knit to replace
+  r = run("simulate " + ex + "/pendulum.json --knit " + ex +
+          "/knits/stockinette_12x12.kstate --out " + dir + "/run");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.output.find("none or several"), std::string::npos) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/run"));
+  // and the good request writes a closed surface
+  r = run("mesh " + ex + "/drape_sphere.json --object ball --voxel 0.3 --out " + dir + "/ball.obj");
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("0 open edges"), std::string::npos) << r.output;
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
