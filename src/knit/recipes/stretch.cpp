@@ -69,7 +69,9 @@ nlohmann::json clamps_json(StretchDirection d, int k, const nlohmann::json& keyf
 
 Scene stretch_scene(const std::string& path, const StretchOptions& o,
                     const nlohmann::json& keyframes) {
-  const nlohmann::json doc = {{"knits", nlohmann::json::array({{{"state", path}}})},
+  // the knit's state path is read relative to the scene's own path: give it absolute
+  const std::string state = fs::absolute(path).string();
+  const nlohmann::json doc = {{"knits", nlohmann::json::array({{{"state", state}}})},
                               {"clamps", clamps_json(o.direction, o.clamp_stitches, keyframes)}};
   return parse_scene(doc, path, o.params);
 }
