@@ -14,6 +14,7 @@
 #include "knit/io/run_dir.hpp"
 #include "knit/io/states.hpp"
 #include "knit/render/render.hpp"
+#include "knit/render/sequence.hpp"
 
 namespace knitsim {
 namespace fs = std::filesystem;
@@ -98,7 +99,7 @@ void render_compare(const RenderArgs& a, knit::RenderOptions o) {
   std::cout << "wrote " << a.out << "\n";
 }
 
-void render_sequence(const RenderArgs& a, knit::RenderOptions o) {
+void render_sequence(const RenderArgs& a, const knit::RenderOptions& o) {
   const auto files = knit::list_state_files(a.input);
   if (fs::exists(a.out) && !fs::is_directory(a.out))
     throw std::runtime_error("--out " + a.out +
@@ -106,39 +107,14 @@ void render_sequence(const RenderArgs& a, knit::RenderOptions o) {
                              "directory");
   // frames of an earlier sequence would end up in this one's movie
   knit::prepare_run_directory(a.out, a.overwrite);
-  // one camera for the whole sequence: frame the union of every state's bounds
-  Eigen::AlignedBox3d box;
-  for (const auto& f : files) box.extend(knit::scene_bounds(knit::read_state_file(f), o.objects));
-  o.frame = box;
-  const auto t0 = std::chrono::steady_clock::now();
-  for (size_t i = 0; i < files.size(); ++i) {
-    const knit::StateFile s = knit::read_state_file(files[i]);
-    if (i == 0) note_rows(s, a, files[i]);
-    char name[32];
-    std::snprintf(name, sizeof(name), "frame_%04zu.png", i);
-    knit::write_png(knit::render_state(s, o), (fs::path(a.out) / name).string());
-  }
-  std::cout << "wrote " << files.size() << " frames to " << a.out << " ("
-            << seconds_since(t0) / files.size() << " s per frame)\n";
-  const std::string ffmpeg = knit::find_executable("ffmpeg");
-  if (ffmpeg.empty()) {
+  note_rows(knit::read_state_file(files.front()), a, files.front());
+  const knit::SequenceResult r = knit::render_sequence(files, o, a.out, a.fps);
+  std::cout << "wrote " << r.frames << " frames to " << a.out << " (" << r.seconds_per_frame
+            << " s per frame)\n";
+  if (r.movie.empty())
     std::cout << "ffmpeg is not on PATH: no movie made\n";
-    return;
-  }
-  const std::string movie = (fs::path(a.out) / "animation.mp4").string();
-  const std::string tmp = (fs::path(a.out) / "animation.tmp.mp4").string();
-  std::string messages;
-  const int rc =
-      knit::run_process({ffmpeg, "-y", "-loglevel", "error", "-framerate", std::to_string(a.fps),
-                         "-i", (fs::path(a.out) / "frame_%04d.png").string(), "-vf",
-                         "scale=trunc(iw/2)*2:trunc(ih/2)*2", "-pix_fmt", "yuv420p", tmp},
-                        messages);
-  if (rc != 0) {
-    fs::remove(tmp);
-    throw std::runtime_error(movie + ": ffmpeg failed: " + messages);
-  }
-  fs::rename(tmp, movie);
-  std::cout << "wrote " << movie << "\n";
+  else
+    std::cout << "wrote " << r.movie << "\n";
 }
 
 void render_any(const RenderArgs& a, const knit::RenderOptions& o);
