@@ -28,7 +28,7 @@ void register_stretch(CLI::App& app) {
     double relax_time = 1.0;
     int contact_points = knit::stretch_params().discretisation.contact_points;
     int threads = 0;
-    bool quiet = false, no_frames = false, overwrite = false;
+    bool quiet = false, no_frames = false, no_render = false, overwrite = false;
   };
   auto o = std::make_shared<Opts>();
   CLI::App* cmd = app.add_subcommand(
@@ -63,7 +63,9 @@ void register_stretch(CLI::App& app) {
   cmd->add_option("--relax-time", o->relax_time, "seconds of relaxation before the pull")
       ->check(finite_positive(knit::MAX_DURATION));
   add_threads_option(cmd, o->threads);
-  cmd->add_flag("--no-frames", o->no_frames, "write no states along the way");
+  cmd->add_flag("--no-frames", o->no_frames, "write no states along the way (and no renders)");
+  cmd->add_flag("--no-render", o->no_render,
+                "no renders at strains 0, 0.25, 0.5, 1 and no movie of the frames");
   cmd->add_flag("--quiet,-q", o->quiet, "no progress line");
   cmd->callback([o]() {
     if (!o->plot.empty()) {
@@ -81,6 +83,7 @@ void register_stretch(CLI::App& app) {
     o->stretch.overwrite = o->overwrite;
     o->stretch.progress = !o->quiet;
     o->stretch.write_frames = !o->no_frames;
+    o->stretch.render = !o->no_render;
     add_provenance(o->stretch.extra);
     knit::check_run_directory(o->out, o->overwrite);  // before a relaxation of minutes
     auto control = make_thread_control(o->threads);

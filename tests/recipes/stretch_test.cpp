@@ -9,6 +9,7 @@
 #include <fstream>
 
 #include "knit/io/plot.hpp"
+#include "knit/io/process.hpp"
 #include "knit/io/state_file.hpp"
 #include "knit/recipes/relax_knit.hpp"
 
@@ -40,6 +41,8 @@ TEST(Stretch, ForceRisesAndTheClampsBalance) {
   o.progress = false;
   o.out_dir = (fs::path(::testing::TempDir()) / "stretch_course").string();
   o.overwrite = true;
+  o.render_width = 64;  // small pictures: the test checks that they are made
+  o.render_height = 48;
   const StretchResult r = stretch_knit(relaxed_sample(), o);
   ASSERT_EQ(r.report.summary["status"], "ok") << r.report.summary.dump(2);
   ASSERT_GE(r.curve.size(), 15u);
@@ -72,6 +75,12 @@ TEST(Stretch, ForceRisesAndTheClampsBalance) {
   if (!find_gnuplot().empty())
     for (const char* png : {"stretch_force.png", "stretch_width.png"})
       EXPECT_TRUE(fs::exists(o.out_dir + "/" + png)) << png;
+  // renders at strain 0 and at the end (0.2 < 0.25), side by side, and a movie of the frames
+  for (const char* png : {"stretch_renders.png", "renders/strain_0.png", "renders/strain_0.2.png"})
+    EXPECT_TRUE(fs::exists(o.out_dir + "/" + png)) << png;
+  EXPECT_EQ(s["renders"]["images"].size(), 2u) << s["renders"].dump();
+  if (!find_executable("ffmpeg").empty())
+    EXPECT_TRUE(fs::exists(o.out_dir + "/movie/animation.mp4"));
 }
 
 TEST(Stretch, WaleAndBiasPullAlongTheirAxes) {
@@ -89,6 +98,23 @@ TEST(Stretch, WaleAndBiasPullAlongTheirAxes) {
       EXPECT_GT(std::min(std::abs(r.axis.x()), std::abs(r.axis.y())), 0.4) << r.axis.transpose();
     EXPECT_GT(r.curve.back().force_moving, 0.0) << d;
   }
+}
+
+// --from a relative path is read from the working directory (not from beside itself)
+TEST(Stretch, ARelativePathIsReadFromTheWorkingDirectory) {
+  const fs::path sample = relaxed_sample(), cwd = fs::current_path();
+  fs::current_path(sample.parent_path());
+  StretchOptions o;
+  o.to_strain = 0.01;
+  o.progress = false;
+  std::string error;
+  try {
+    stretch_knit(sample.filename().string(), o);
+  } catch (const std::exception& e) {
+    error = e.what();
+  }
+  fs::current_path(cwd);
+  EXPECT_EQ(error, "");
 }
 
 TEST(Stretch, BadOptionsAreRefusedBeforeAnythingIsWritten) {

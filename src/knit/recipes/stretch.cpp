@@ -12,7 +12,9 @@
 #include "knit/io/plot.hpp"
 #include "knit/io/run_dir.hpp"
 #include "knit/io/state_file.hpp"
+#include "knit/io/states.hpp"
 #include "knit/recipes/simulate_scene.hpp"
+#include "knit/render/sequence.hpp"
 #include "knit/scene/scene.hpp"
 
 namespace knit {
@@ -148,6 +150,74 @@ void write_stretch_csv(const std::vector<StretchSample>& curve, const std::strin
   write_file_atomic(path, o.str());
 }
 
+namespace {
+
+// the strains the renders show: 0, 0.25, 0.5, 1 up to `to`, and `to` itself
+std::vector<double> render_strains(double to) {
+  std::vector<double> e;
+  for (double x : {0.0, 0.25, 0.5, 1.0})
+    if (x < to * (1 - 1e-9)) e.push_back(x);
+  e.push_back(to);
+  return e;
+}
+
+std::string strain_label(double e) {
+  std::ostringstream s;
+  s << std::setprecision(3) << e;
+  return s.str();
+}
+
+// renders of the frames nearest each shown strain (first pull only), side by side, and a
+// movie of every frame; returns the summary's "renders" entry
+nlohmann::json render_stretch(const std::string& out_dir, const std::vector<StretchSample>& curve,
+                              double to, const StretchOptions& o) {
+  const fs::path dir(out_dir);
+  const std::vector<std::string> frames = list_state_files(out_dir);
+  if (frames.size() != curve.size())
+    throw std::runtime_error(out_dir + ": " + std::to_string(frames.size()) + " frames for " +
+                             std::to_string(curve.size()) + " samples of the curve");
+  RenderOptions ro;
+  ro.width = o.render_width;
+  ro.height = o.render_height;
+  ro.view = View::FRONT;
+  ro.color_rows = true;
+  // one scale for every picture: the box of every frame
+  Eigen::AlignedBox3d box;
+  for (const std::string& f : frames) box.extend(state_bounds(read_state_file(f)));
+  ro.frame = box;
+  size_t end = curve.size();  // the first pull: up to the first sample at `to`
+  for (size_t i = 0; i < curve.size(); ++i)
+    if (curve[i].strain >= to * (1 - 1e-9)) {
+      end = i + 1;
+      break;
+    }
+  fs::create_directories(dir / "renders");
+  std::vector<Image> panels;
+  std::vector<std::string> labels;
+  nlohmann::json shown = nlohmann::json::object();
+  for (double e : render_strains(to)) {
+    size_t best = 0;
+    for (size_t i = 0; i < end; ++i)
+      if (std::abs(curve[i].strain - e) < std::abs(curve[best].strain - e)) best = i;
+    panels.push_back(render_state(read_state_file(frames[best]), ro));
+    const std::string name = "renders/strain_" + strain_label(e) + ".png";
+    write_png(panels.back(), (dir / name).string());
+    labels.push_back("strain " + strain_label(curve[best].strain));
+    shown[strain_label(e)] = name;
+  }
+  write_png(compose_side_by_side(panels, labels), (dir / "stretch_renders.png").string());
+  fs::create_directories(dir / "movie");
+  // movie frames at a lighter sampling than the stills
+  ro.spp = ro.shadow_rays = ro.ao_rays = 2;
+  const SequenceResult movie = render_sequence(frames, ro, (dir / "movie").string(), 30);
+  return {{"images", shown},
+          {"side_by_side", "stretch_renders.png"},
+          {"movie",
+           movie.movie.empty() ? nlohmann::json(nullptr) : nlohmann::json("movie/animation.mp4")}};
+}
+
+}  // namespace
+
 StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions& o) {
   // everything is validated before anything is written
   if (!(o.to_strain > 0) || !std::isfinite(o.to_strain) || o.to_strain > 10)
@@ -158,6 +228,9 @@ StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions&
   if (o.cycles < 0 || o.cycles > 100)
     throw std::invalid_argument("--cycles: expected 0 to 100, got " + std::to_string(o.cycles));
   if (o.clamp_stitches < 1) throw std::invalid_argument("--clamp-stitches: expected at least 1");
+  if (o.render && (o.render_width < 16 || o.render_height < 16 || o.render_width > 8192 ||
+                   o.render_height > 8192))
+    throw std::invalid_argument("render size: expected 16 to 8192 pixels each way");
   if (!(o.output_strain > 0) || !(o.output_strain <= o.to_strain))
     throw std::invalid_argument("output strain: expected (0, --to]");
   validate_params(o.params);
@@ -296,6 +369,16 @@ StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions&
                   "Stretch: " + label, (dir / "stretch_force.png").string());
       plot_series({width}, "nominal strain", "width across the pull at the middle (cm)",
                   "Width: " + label, (dir / "stretch_width.png").string());
+    }
+    if (o.render && o.write_frames && result.report.status == StepStatus::OK) {
+      const nlohmann::json renders = render_stretch(o.out_dir, result.curve, o.to_strain, o);
+      // the summary was written by the run: add where the pictures are
+      const fs::path summary_path = dir / "summary.json";
+      std::ifstream in(summary_path);
+      nlohmann::json summary = nlohmann::json::parse(in);
+      in.close();
+      summary["renders"] = renders;
+      write_file_atomic(summary_path.string(), summary.dump(2) + "\n");
     }
   }
   return result;

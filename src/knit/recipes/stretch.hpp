@@ -40,6 +40,11 @@ struct StretchOptions {
   bool overwrite = false;
   bool progress = true;
   bool write_frames = true;
+  /// with out_dir and frames: renders of the sample at strains 0, 0.25, 0.5 and 1 (those up
+  /// to to_strain, and to_strain itself) side by side in stretch_renders.png (each also as
+  /// renders/strain_<e>.png), and a movie of every frame in movie/animation.mp4
+  bool render = true;
+  int render_width = 640, render_height = 480;
   nlohmann::json extra = nlohmann::json::object();  ///< merged into the summary
 };
 
@@ -65,7 +70,8 @@ struct StretchResult {
 
 /// Stretches the relaxed knit in `kstate_path` (written by `knitsim relax`). With out_dir,
 /// writes the run (frames, log.csv, final.kstate) and stretch.csv, a summary.json with
-/// the stretch measures (see stretch_measures) and stretch_force.png / stretch_width.png.
+/// the stretch measures (see stretch_measures) and stretch_force.png / stretch_width.png,
+/// and (options.render) the renders and movie.
 /// Throws std::invalid_argument naming the option on bad input, before anything is written.
 StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions& options);
 
