@@ -1,0 +1,271 @@
+#include "knit/sheet/sheet_solver.hpp"
+
+#include <Eigen/IterativeLinearSolvers>
+#include <Eigen/SparseCholesky>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace knit::sheet {
+
+namespace {
+
+// constraint index of every node (−1: free); validates the constraints
+std::vector<int> constraint_owner(const SheetMesh& mesh,
+                                  const std::vector<SheetConstraint>& constraints) {
+  std::vector<int> owner(mesh.num_nodes(), -1);
+  for (size_t s = 0; s < constraints.size(); ++s) {
+    const SheetConstraint& c = constraints[s];
+    const std::string label = "constraint " + std::to_string(s) +
+                              (c.name.empty() ? std::string() : " ('" + c.name + "')");
+    if (!c.velocity.allFinite()) throw std::invalid_argument(label + ": velocity must be finite");
+    for (int i : c.nodes) {
+      if (i < 0 || i >= mesh.num_nodes())
+        throw std::invalid_argument(label + ": node " + std::to_string(i) + " out of [0, " +
+                                    std::to_string(mesh.num_nodes()) + ")");
+      if (owner[i] >= 0)
+        throw std::invalid_argument(label + ": node " + std::to_string(i) +
+                                    " is already in constraint " + std::to_string(owner[i]));
+      owner[i] = static_cast<int>(s);
+    }
+  }
+  return owner;
+}
+
+// free index of every DOF (−1: constrained)
+std::vector<int> free_dofs(const std::vector<int>& owner, int& n_free) {
+  std::vector<int> map(3 * owner.size(), -1);
+  n_free = 0;
+  for (size_t i = 0; i < owner.size(); ++i)
+    if (owner[i] < 0)
+      for (int r = 0; r < 3; ++r) map[3 * i + r] = n_free++;
+  return map;
+}
+
+// the free rows and columns of a
+Eigen::SparseMatrix<double> restrict_matrix(const Eigen::SparseMatrix<double>& a,
+                                            const std::vector<int>& map, int n_free) {
+  std::vector<Eigen::Triplet<double>> t;
+  t.reserve(a.nonZeros());
+  for (int col = 0; col < a.outerSize(); ++col) {
+    if (map[col] < 0) continue;
+    for (Eigen::SparseMatrix<double>::InnerIterator it(a, col); it; ++it)
+      if (map[it.row()] >= 0) t.emplace_back(map[it.row()], map[col], it.value());
+  }
+  Eigen::SparseMatrix<double> r(n_free, n_free);
+  r.setFromTriplets(t.begin(), t.end());
+  return r;
+}
+
+Eigen::VectorXd restrict_vector(const Eigen::VectorXd& v, const std::vector<int>& map, int n_free) {
+  Eigen::VectorXd r(n_free);
+  for (size_t k = 0; k < map.size(); ++k)
+    if (map[k] >= 0) r[map[k]] = v[k];
+  return r;
+}
+
+void check_state(const SheetMesh& mesh, const SheetState& state, const char* who) {
+  const Eigen::Index n = mesh.num_dofs();
+  if (state.positions.size() != n)
+    throw std::invalid_argument(std::string(who) + ": state.positions has " +
+                                std::to_string(state.positions.size()) + " entries, expected " +
+                                std::to_string(n));
+  if (state.velocities.size() != n)
+    throw std::invalid_argument(std::string(who) + ": state.velocities has " +
+                                std::to_string(state.velocities.size()) + " entries, expected " +
+                                std::to_string(n));
+}
+
+// −Σ f over each constraint's nodes
+std::vector<Eigen::Vector3d> sum_per_constraint(const std::vector<SheetConstraint>& constraints,
+                                                const Eigen::VectorXd& per_dof) {
+  std::vector<Eigen::Vector3d> r(constraints.size(), Eigen::Vector3d::Zero());
+  for (size_t s = 0; s < constraints.size(); ++s)
+    for (int i : constraints[s].nodes) r[s] += per_dof.segment<3>(3 * i);
+  return r;
+}
+
+double max_abs_free(const Eigen::VectorXd& f, const std::vector<int>& map) {
+  double m = 0;
+  for (size_t k = 0; k < map.size(); ++k)
+    if (map[k] >= 0) m = std::max(m, std::abs(f[k]));
+  return m;
+}
+
+}  // namespace
+
+SheetState rest_state(const SheetMesh& mesh) {
+  SheetState s;
+  s.positions = mesh.rest_positions();
+  s.velocities = Eigen::VectorXd::Zero(mesh.num_dofs());
+  return s;
+}
+
+void move_constraints(const std::vector<SheetConstraint>& constraints, double dt,
+                      SheetState& state) {
+  for (size_t s = 0; s < constraints.size(); ++s)
+    for (int i : constraints[s].nodes) {
+      if (i < 0 || 3 * i + 2 >= state.positions.size())
+        throw std::invalid_argument("move_constraints: constraint " + std::to_string(s) +
+                                    " names node " + std::to_string(i) + ", out of range");
+      state.positions.segment<3>(3 * i) += dt * constraints[s].velocity;
+    }
+}
+
+StepReport step_implicit_euler(const SheetMesh& mesh, const SheetMaterial& material,
+                               const std::vector<SheetConstraint>& constraints,
+                               const StepSettings& settings, SheetState& state) {
+  const double h = settings.h;
+  if (!(h > 0) || !std::isfinite(h))
+    throw std::invalid_argument("step_implicit_euler: time step h must be positive, got " +
+                                std::to_string(h));
+  check_state(mesh, state, "step_implicit_euler");
+  const std::vector<int> owner = constraint_owner(mesh, constraints);
+  int n_free = 0;
+  const std::vector<int> map = free_dofs(owner, n_free);
+  const int n = mesh.num_nodes();
+  const Eigen::VectorXd& x0 = state.positions;
+  const Eigen::VectorXd& v0 = state.velocities;
+
+  const SheetForces f = evaluate_forces(mesh, material, x0, v0, settings.gravity, Jacobians::PSD);
+  Eigen::VectorXd mass(3 * n);
+  for (int i = 0; i < n; ++i) mass.segment<3>(3 * i).setConstant(mesh.mass[i]);
+
+  // A = M − h D − h² K,  b = h (f₀ + h K v₀)
+  Eigen::SparseMatrix<double> a = -h * f.dfdv - (h * h) * f.dfdx;
+  {
+    Eigen::SparseMatrix<double> m(3 * n, 3 * n);
+    std::vector<Eigen::Triplet<double>> t;
+    for (int k = 0; k < 3 * n; ++k) t.emplace_back(k, k, mass[k]);
+    m.setFromTriplets(t.begin(), t.end());
+    a += m;
+  }
+  const Eigen::VectorXd b = h * (f.force + h * (f.dfdx * v0));
+
+  // prescribed Δv of the constrained nodes
+  Eigen::VectorXd dv = Eigen::VectorXd::Zero(3 * n);
+  for (int i = 0; i < n; ++i)
+    if (owner[i] >= 0) dv.segment<3>(3 * i) = constraints[owner[i]].velocity - v0.segment<3>(3 * i);
+
+  StepReport report;
+  report.potential_energy = f.energy();
+  if (n_free > 0) {
+    const Eigen::SparseMatrix<double> aff = restrict_matrix(a, map, n_free);
+    const Eigen::VectorXd rhs = restrict_vector(b - a * dv, map, n_free);
+    Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper,
+                             Eigen::DiagonalPreconditioner<double>>
+        cg;
+    cg.setTolerance(settings.cg_tolerance);
+    cg.setMaxIterations(settings.cg_max_iterations);
+    cg.compute(aff);
+    const Eigen::VectorXd dvf = cg.solve(rhs);
+    report.cg_iterations = static_cast<int>(cg.iterations());
+    report.cg_error = cg.error();
+    if (cg.info() != Eigen::Success || !dvf.allFinite())
+      throw std::runtime_error("step_implicit_euler at t = " + std::to_string(state.time) +
+                               ": conjugate gradient did not converge (" +
+                               std::to_string(report.cg_iterations) + " iterations, residual " +
+                               std::to_string(report.cg_error) + "); state kept");
+    for (size_t k = 0; k < map.size(); ++k)
+      if (map[k] >= 0) dv[k] = dvf[map[k]];
+  }
+
+  // reaction = (A Δv − b)/h on the constrained rows = m a − f (linearised)
+  report.reactions = sum_per_constraint(constraints, (a * dv - b) / h);
+
+  Eigen::VectorXd v1 = v0 + dv;
+  for (int i = 0; i < n; ++i)
+    if (owner[i] >= 0) v1.segment<3>(3 * i) = constraints[owner[i]].velocity;  // exactly
+  const Eigen::VectorXd x1 = x0 + h * v1;
+  if (!x1.allFinite() || !v1.allFinite())
+    throw std::runtime_error("step_implicit_euler at t = " + std::to_string(state.time) +
+                             ": the step produced non-finite values; state kept");
+  state.positions = x1;
+  state.velocities = v1;
+  state.time += h;
+  report.kinetic_energy = 0.5 * v1.cwiseProduct(v1).dot(mass);
+  return report;
+}
+
+StaticReport solve_static(const SheetMesh& mesh, const SheetMaterial& material,
+                          const std::vector<SheetConstraint>& constraints,
+                          const StaticSettings& settings, SheetState& state) {
+  if (settings.max_iterations < 0)
+    throw std::invalid_argument("solve_static: max_iterations must be >= 0");
+  check_state(mesh, state, "solve_static");
+  const std::vector<int> owner = constraint_owner(mesh, constraints);
+  int n_free = 0;
+  const std::vector<int> map = free_dofs(owner, n_free);
+  const Eigen::VectorXd zero_v = Eigen::VectorXd::Zero(mesh.num_dofs());
+  const Eigen::Vector3d g = settings.gravity;
+
+  Eigen::VectorXd x = state.positions;
+  StaticReport report;
+  double start_residual = -1;
+  SheetForces f = evaluate_forces(mesh, material, x, zero_v, g, Jacobians::PSD);
+  for (;;) {
+    const double residual = max_abs_free(f.force, map);
+    if (start_residual < 0) start_residual = residual;
+    report.residual = residual;
+    if (residual <=
+        std::max(settings.force_tolerance, settings.relative_tolerance * start_residual)) {
+      report.converged = true;
+      break;
+    }
+    if (report.iterations >= settings.max_iterations) break;
+    ++report.iterations;
+
+    // Newton direction on the free DOFs: H d = f, H = −∂f/∂x (PSD)
+    const Eigen::SparseMatrix<double> hff = restrict_matrix(-f.dfdx, map, n_free);
+    const Eigen::VectorXd ff = restrict_vector(f.force, map, n_free);
+    Eigen::VectorXd d;
+    const double diag = hff.diagonal().cwiseAbs().maxCoeff();
+    bool ok = false;
+    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt;
+    ldlt.analyzePattern(hff);
+    for (double mu = 0; mu < 1e3 * diag; mu = (mu == 0 ? 1e-10 * diag : 100 * mu)) {
+      Eigen::SparseMatrix<double> reg = hff;
+      if (mu > 0)
+        for (int k = 0; k < n_free; ++k) reg.coeffRef(k, k) += mu;
+      ldlt.factorize(reg);
+      if (ldlt.info() != Eigen::Success) continue;
+      d = ldlt.solve(ff);
+      if (d.allFinite() && d.dot(ff) > 0 && (ldlt.vectorD().array() > 0).all()) {
+        ok = true;
+        break;
+      }
+    }
+    if (!ok) break;
+
+    // backtracking line search: Armijo on the energy, or (near the minimum, where the energy
+    // change drowns in round-off) a decrease of the force residual
+    const double e0 = f.energy(), slope = d.dot(ff), fnorm = ff.norm();
+    bool accepted = false;
+    for (double alpha = 1; alpha > 1e-8; alpha *= 0.5) {
+      Eigen::VectorXd xt = x;
+      for (size_t k = 0; k < map.size(); ++k)
+        if (map[k] >= 0) xt[k] += alpha * d[map[k]];
+      const double et = potential_energy(mesh, material, xt, g);
+      bool accept = std::isfinite(et) && et <= e0 - 1e-4 * alpha * slope;
+      SheetForces ft;
+      if (!accept && std::isfinite(et)) {
+        ft = evaluate_forces(mesh, material, xt, zero_v, g, Jacobians::NONE);
+        accept = restrict_vector(ft.force, map, n_free).norm() < (1 - 1e-4 * alpha) * fnorm;
+      }
+      if (accept) {
+        x = xt;
+        accepted = true;
+        break;
+      }
+    }
+    if (!accepted) break;
+    f = evaluate_forces(mesh, material, x, zero_v, g, Jacobians::PSD);
+  }
+  report.energy = f.energy();
+  report.reactions = sum_per_constraint(constraints, -f.force);
+  state.positions = x;
+  state.velocities.setZero();
+  return report;
+}
+
+}  // namespace knit::sheet
