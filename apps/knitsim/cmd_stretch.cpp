@@ -1,5 +1,6 @@
 // knitsim stretch PATTERN --direction course|wale|bias --to STRAIN --out DIR
 // knitsim stretch --from relaxed.kstate --direction … --out DIR
+// knitsim stretch --from relaxed.kstate --sheet [--fit RUN,RUN,RUN] --direction … --out DIR
 // knitsim stretch DIR1 DIR2 … --plot curves.png
 // A thin adapter over the stretch recipe (src/knit/recipes/stretch.hpp); a PATTERN is
 // first relaxed with the relax recipe's defaults.
@@ -15,6 +16,7 @@
 #include "knit/io/run_dir.hpp"
 #include "knit/io/state_file.hpp"
 #include "knit/recipes/relax_knit.hpp"
+#include "knit/recipes/sheet_stretch.hpp"
 #include "knit/recipes/stretch.hpp"
 
 namespace knitsim {
@@ -24,6 +26,9 @@ void register_stretch(CLI::App& app) {
     std::vector<std::string> inputs;
     std::string from, out, plot, direction = "course";
     knit::StretchOptions stretch;
+    knit::SheetStretchOptions sheet;
+    bool use_sheet = false;
+    std::vector<std::string> fit;
     knit::RelaxKnitOptions relax;
     double relax_time = 1.0;
     int contact_points = knit::stretch_params().discretisation.contact_points;
@@ -48,6 +53,22 @@ void register_stretch(CLI::App& app) {
   cmd->add_option("--speed", o->stretch.speed, "speed of the moving clamp (cm/s)");
   cmd->add_option("--clamp-stitches", o->stretch.clamp_stitches,
                   "columns, rows or corner stitches held by each clamp");
+  cmd->add_flag("--sheet", o->use_sheet,
+                "stretch the elastic-sheet model (Baraff–Witkin) carrying the knit's geometry, "
+                "quasi-statically, instead of the yarn model");
+  cmd->add_option("--fit", o->fit,
+                  "with --sheet: fit the sheet's stiffnesses to these yarn stretch runs of the "
+                  "same knit (course, wale, bias; comma-separated directories)")
+      ->delimiter(',');
+  cmd->add_option("--k-course", o->sheet.material.k_stretch_u,
+                  "with --sheet: stretch stiffness along the course (dyn/cm)");
+  cmd->add_option("--k-wale", o->sheet.material.k_stretch_v,
+                  "with --sheet: stretch stiffness along the wale (dyn/cm)");
+  cmd->add_option("--k-shear", o->sheet.material.k_shear, "with --sheet: shear stiffness (dyn/cm)");
+  cmd->add_option("--k-bend", o->sheet.material.k_bend,
+                  "with --sheet: bending stiffness per hinge (erg)");
+  cmd->add_option("--node-spacing", o->sheet.node_spacing,
+                  "with --sheet: distance between the sheet's grid nodes (cm)");
   cmd->add_option("--contact-points", o->contact_points, "contact quadrature points per segment")
       ->check(CLI::Range(1, 64));
   cmd->add_option("--alpha-small", o->stretch.params.material.alpha_small,
@@ -67,7 +88,7 @@ void register_stretch(CLI::App& app) {
   cmd->add_flag("--no-render", o->no_render,
                 "no renders at strains 0, 0.25, 0.5, 1 and no movie of the frames");
   cmd->add_flag("--quiet,-q", o->quiet, "no progress line");
-  cmd->callback([o]() {
+  cmd->callback([o, cmd]() {
     if (!o->plot.empty()) {
       if (o->inputs.empty())
         throw std::invalid_argument("stretch --plot: give the stretch runs' directories");
@@ -75,6 +96,12 @@ void register_stretch(CLI::App& app) {
       return;
     }
     if (o->out.empty()) throw std::invalid_argument("stretch: --out is required");
+    if (!o->use_sheet &&
+        (!o->fit.empty() || cmd->count("--k-course") + cmd->count("--k-wale") +
+                                    cmd->count("--k-shear") + cmd->count("--k-bend") +
+                                    cmd->count("--node-spacing") >
+                                0))
+      throw std::invalid_argument("stretch: --fit, --k-* and --node-spacing need --sheet");
     if (o->from.empty() == (o->inputs.size() != 1))
       throw std::invalid_argument("stretch: give either one PATTERN or --from STATE");
     o->stretch.direction = knit::parse_stretch_direction(o->direction);
@@ -105,7 +132,18 @@ void register_stretch(CLI::App& app) {
     }
     knit::StretchResult result;
     try {
-      result = knit::stretch_knit(from, o->stretch);
+      if (o->use_sheet) {
+        o->sheet.stretch = o->stretch;
+        if (!o->fit.empty()) {
+          const knit::SheetFit fit = knit::fit_sheet_material(from, o->fit, o->sheet);
+          o->sheet.material = fit.material;
+          o->sheet.fit = fit.report;
+          if (!o->quiet) std::cerr << "sheet fitted: " << fit.report["material"].dump() << "\n";
+        }
+        result = knit::stretch_sheet(from, o->sheet);
+      } else {
+        result = knit::stretch_knit(from, o->stretch);
+      }
     } catch (...) {
       if (!temp.empty()) std::remove(temp.c_str());
       throw;
@@ -115,8 +153,17 @@ void register_stretch(CLI::App& app) {
                                  std::filesystem::copy_options::overwrite_existing);
       std::remove(temp.c_str());
     }
-    print_report(result.report, o->out);
-    end_if_interrupted(result.report);
+    if (o->use_sheet) {
+      const auto& sh = result.report.summary["sheet"];
+      std::cout << "status " << result.report.summary["status"].get<std::string>() << ": "
+                << result.curve.size() << " equilibria of the sheet (" << sh["nodes"] << " nodes), "
+                << sh["newton_iterations"] << " Newton iterations in "
+                << result.report.summary["wall_time_s"] << " s; outputs in " << o->out << "/\n";
+      if (!result.report.message.empty()) std::cerr << "knitsim: " << result.report.message << "\n";
+    } else {
+      print_report(result.report, o->out);
+      end_if_interrupted(result.report);
+    }
     const auto& m = result.report.summary["stretch"];
     std::cout << "stretched " << o->direction << " to strain " << o->stretch.to_strain
               << ": initial clamp separation " << result.initial_separation << " cm, max force "

@@ -83,6 +83,33 @@ TEST(Stretch, ForceRisesAndTheClampsBalance) {
     EXPECT_TRUE(fs::exists(o.out_dir + "/movie/animation.mp4"));
 }
 
+// The measures of a known curve: F = 50 + 100 ε after a jump at the start (a clamp that
+// starts at speed meets the damping's drag at once), then F = 50 + 100 ε + 2000 (ε − 0.6)²
+// beyond ε = 0.6, a stiffening; separation 10 cm.
+TEST(Stretch, TheCurvesMeasuresAreTheKnownOnes) {
+  std::vector<StretchSample> curve;
+  for (int i = 0; i <= 100; ++i) {
+    StretchSample s;
+    s.strain = i / 100.0;
+    const double e = s.strain;
+    s.force_moving = i == 0 ? 0 : 50 + 100 * e + (e > 0.6 ? 2000 * (e - 0.6) * (e - 0.6) : 0);
+    s.width = 5 - e;
+    curve.push_back(s);
+  }
+  const nlohmann::json m = stretch_measures(curve, 1.0, 10.0);
+  EXPECT_NEAR(m["stiffness_small_strain"].get<double>(), 100, 1e-9);  // the jump left out
+  // the last tenth: slope of 100 + 4000 (ε − 0.6) averaged over [0.9, 1]
+  EXPECT_NEAR(m["stiffness_end"].get<double>(), 100 + 4000 * 0.35, 1e-6);
+  // 3 × 100 is first reached by a tenth-wide window starting where 4000 (ε₀ + 0.05 − 0.6) = 200
+  EXPECT_NEAR(m["stiffening_strain"].get<double>(), 0.6, 0.051);
+  // work: 10 cm × ∫ F dε by the trapezoid rule (the first interval from 0 to the jump)
+  double work = 0;
+  for (int i = 1; i <= 100; ++i)
+    work += 0.5 * (curve[i].force_moving + curve[i - 1].force_moving) * 0.1;
+  EXPECT_NEAR(m["work_erg"].get<double>(), work, 1e-9 * work);
+  EXPECT_NEAR(m["width_change"].get<double>(), 4.0 / 5 - 1, 1e-12);
+}
+
 TEST(Stretch, WaleAndBiasPullAlongTheirAxes) {
   for (const char* d : {"wale", "bias"}) {
     StretchOptions o;

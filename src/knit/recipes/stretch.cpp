@@ -114,7 +114,9 @@ nlohmann::json stretch_measures(const std::vector<StretchSample>& curve, double 
       break;
     }
   const double window = 0.1 * to;
-  const double k0 = slope(curve, n, 0, window);
+  // the small-strain slope leaves out the rest sample at strain 0: a clamp that starts
+  // moving at speed meets the damping's drag at once, a jump that is not stiffness
+  const double k0 = slope(curve, n, 1e-12, window);
   m["stiffness_small_strain"] = number_or_null(k0);
   m["stiffness_end"] = number_or_null(slope(curve, n, to - window, to));
   double stiffening = std::numeric_limits<double>::quiet_NaN();
@@ -218,8 +220,7 @@ nlohmann::json render_stretch(const std::string& out_dir, const std::vector<Stre
 
 }  // namespace
 
-StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions& o) {
-  // everything is validated before anything is written
+void validate_stretch_options(const StretchOptions& o) {
   if (!(o.to_strain > 0) || !std::isfinite(o.to_strain) || o.to_strain > 10)
     throw std::invalid_argument("--to: expected a strain in (0, 10], got " +
                                 short_number(o.to_strain));
@@ -234,13 +235,17 @@ StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions&
   if (!(o.output_strain > 0) || !(o.output_strain <= o.to_strain))
     throw std::invalid_argument("output strain: expected (0, --to]");
   validate_params(o.params);
-  const StateFile file = read_state_file(kstate_path);
-  if (file.stitch.empty())
+}
+
+StretchGeometry stretch_geometry(const std::string& kstate_path, const StretchOptions& o) {
+  StretchGeometry g;
+  g.file = read_state_file(kstate_path);
+  if (g.file.stitch.empty())
     throw std::invalid_argument(kstate_path +
                                 ": no stitch coordinates: stretch a knit written "
                                 "by `knitsim relax`");
   int rows = 0, cols = 0;
-  for (const StitchCoord& s : file.stitch) {
+  for (const StitchCoord& s : g.file.stitch) {
     rows = std::max(rows, s.row + 1);
     cols = std::max(cols, s.col + 1);
   }
@@ -256,26 +261,88 @@ StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions&
 
   // the clamps' centres give the pull axis and the initial separation
   const Scene probe = stretch_scene(kstate_path, o, nlohmann::json::array());
-  const Eigen::Vector3d c0 = probe.model.clamps[0].centre, c1 = probe.model.clamps[1].centre;
-  StretchResult result;
-  result.initial_separation = (c1 - c0).norm();
-  if (!(result.initial_separation > 0))
-    throw std::invalid_argument(kstate_path + ": the two clamps coincide");
-  const Eigen::Vector3d axis = (c1 - c0) / result.initial_separation;
-  result.axis = axis;
+  g.fixed = probe.model.clamps[0];
+  g.moving = probe.model.clamps[1];
+  g.q0 = probe.state.q;
+  g.radius = probe.model.params.material.radius;
+  const Eigen::Vector3d c0 = g.fixed.centre, c1 = g.moving.centre;
+  g.separation = (c1 - c0).norm();
+  if (!(g.separation > 0)) throw std::invalid_argument(kstate_path + ": the two clamps coincide");
+  g.axis = (c1 - c0) / g.separation;
   // across the pull, in the fabric: the sample's normal is its direction of least spread
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
   const int ncp = probe.model.num_cp();
-  for (int k = 0; k < ncp; ++k) mean += probe.state.q.segment<3>(3 * k);
+  for (int k = 0; k < ncp; ++k) mean += g.q0.segment<3>(3 * k);
   mean /= ncp;
   Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
   for (int k = 0; k < ncp; ++k) {
-    const Eigen::Vector3d d = probe.state.q.segment<3>(3 * k) - mean;
+    const Eigen::Vector3d d = g.q0.segment<3>(3 * k) - mean;
     cov += d * d.transpose();
   }
-  const Eigen::Vector3d normal =
-      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(cov).eigenvectors().col(0);
-  const Eigen::Vector3d across_axis = normal.cross(axis).normalized();
+  g.centroid = mean;
+  g.normal = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(cov).eigenvectors().col(0);
+  g.across = g.normal.cross(g.axis).normalized();
+  return g;
+}
+
+double StretchGeometry::width(const Eigen::VectorXd& q, double moved) const {
+  // the width across the pull of the band of control points around the middle (± half a cm)
+  const double band = 0.5 * radius * 8;
+  const double mid = 0.5 * (fixed.centre.dot(axis) + moving.centre.dot(axis) + moved);
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (int k = 0; k < static_cast<int>(q.size() / 3); ++k) {
+    const Eigen::Vector3d p = q.segment<3>(3 * k);
+    if (std::abs(p.dot(axis) - mid) > band) continue;
+    lo = std::min(lo, p.dot(across));
+    hi = std::max(hi, p.dot(across));
+  }
+  return hi >= lo ? hi - lo + 2 * radius : 0.0;
+}
+
+void write_stretch_outputs(const StretchOptions& o, const std::vector<StretchSample>& curve,
+                           const std::string& label, bool finished) {
+  const fs::path dir(o.out_dir);
+  write_stretch_csv(curve, (dir / "stretch.csv").string());
+  if (!find_gnuplot().empty()) {
+    PlotSeries fixed{"fixed clamp", {}, {}}, pulled{"moving clamp", {}, {}}, width{"width", {}, {}};
+    for (const StretchSample& s : curve) {
+      fixed.x.push_back(s.strain);
+      fixed.y.push_back(s.force_fixed);
+      pulled.x.push_back(s.strain);
+      pulled.y.push_back(s.force_moving);
+      width.x.push_back(s.strain);
+      width.y.push_back(s.width);
+    }
+    plot_series({pulled, fixed}, "nominal strain", "force along the pull (dyn)",
+                "Stretch: " + label, (dir / "stretch_force.png").string());
+    plot_series({width}, "nominal strain", "width across the pull at the middle (cm)",
+                "Width: " + label, (dir / "stretch_width.png").string());
+  }
+  if (o.render && o.write_frames && finished) {
+    const nlohmann::json renders = render_stretch(o.out_dir, curve, o.to_strain, o);
+    // the summary was written by the run: add where the pictures are
+    const fs::path summary_path = dir / "summary.json";
+    std::ifstream in(summary_path);
+    nlohmann::json summary = nlohmann::json::parse(in);
+    in.close();
+    summary["renders"] = renders;
+    write_file_atomic(summary_path.string(), summary.dump(2) + "\n");
+  }
+}
+
+std::string stretch_label(const StateFile& file, StretchDirection direction) {
+  return std::string(file.knit ? file.knit->pattern + ", " : "") +
+         stretch_direction_name(direction);
+}
+
+StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions& o) {
+  // everything is validated before anything is written
+  validate_stretch_options(o);
+  const StretchGeometry g = stretch_geometry(kstate_path, o);
+  StretchResult result;
+  result.initial_separation = g.separation;
+  result.axis = g.axis;
+  const Eigen::Vector3d axis = g.axis;
 
   // the moving clamp: out to the target strain, then back and forth, each pull a whole
   // number of steps (a partial last step would move the clamp slower and show as a dip)
@@ -298,7 +365,6 @@ StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions&
   if (!o.out_dir.empty()) prepare_run_directory(o.out_dir, o.overwrite);
 
   const Clamp& moving = scene.model.clamps[1];
-  const double band = 0.5 * scene.model.params.material.radius * 8;  // ± half a cm
   auto sample = [&](const StepData& data, const State& state) {
     StretchSample s;
     s.time = state.time;
@@ -306,16 +372,7 @@ StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions&
     s.strain = moved / result.initial_separation;
     if (const ConstraintRecord* f = data.constraint("fixed")) s.force_fixed = -f->force.dot(axis);
     if (const ConstraintRecord* f = data.constraint("moving")) s.force_moving = f->force.dot(axis);
-    // the width across the pull of the band of control points around the middle
-    const double mid = 0.5 * (c0.dot(axis) + c1.dot(axis) + moved);
-    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-    for (int k = 0; k < ncp; ++k) {
-      const Eigen::Vector3d p = state.q.segment<3>(3 * k);
-      if (std::abs(p.dot(axis) - mid) > band) continue;
-      lo = std::min(lo, p.dot(across_axis));
-      hi = std::max(hi, p.dot(across_axis));
-    }
-    s.width = hi >= lo ? hi - lo + 2 * scene.model.params.material.radius : 0.0;
+    s.width = g.width(state.q, moved);
     s.potential_energy = data.potential_energy;
     s.kinetic_energy = data.kinetic_energy;
     s.min_contact_distance = data.contact.present && std::isfinite(data.contact.min_distance_ratio)
@@ -331,7 +388,8 @@ StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions&
   so.write_frames = o.write_frames;
   RunOptions run = scene_run_options(scene, so);
   run.on_output = sample;
-  run.extra = {{"direction", stretch_direction_name(o.direction)},
+  run.extra = {{"model", "yarn"},
+               {"direction", stretch_direction_name(o.direction)},
                {"to_strain", o.to_strain},
                {"cycles", o.cycles},
                {"speed_cm_s", result.speed},
@@ -339,48 +397,19 @@ StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions&
                {"from", kstate_path},
                {"axis", {axis[0], axis[1], axis[2]}}};
   for (const auto& [k, v] : o.extra.items()) run.extra[k] = v;
-  if (file.knit) {
-    run.extra["pattern"] = file.knit->pattern;
-    run.extra["rows"] = file.knit->rows;
-    run.extra["cols"] = file.knit->cols;
+  if (g.file.knit) {
+    run.extra["pattern"] = g.file.knit->pattern;
+    run.extra["rows"] = g.file.knit->rows;
+    run.extra["cols"] = g.file.knit->cols;
   }
   run.on_finish = [&](Simulator&, const State&, nlohmann::json& summary) {
     summary["stretch"] = stretch_measures(result.curve, o.to_strain, result.initial_separation);
   };
   result.report = run_simulation(*sim, scene.state, run);
 
-  if (!o.out_dir.empty()) {
-    const fs::path dir(o.out_dir);
-    write_stretch_csv(result.curve, (dir / "stretch.csv").string());
-    if (!find_gnuplot().empty()) {
-      PlotSeries fixed{"fixed clamp", {}, {}}, pulled{"moving clamp", {}, {}},
-          width{"width", {}, {}};
-      for (const StretchSample& s : result.curve) {
-        fixed.x.push_back(s.strain);
-        fixed.y.push_back(s.force_fixed);
-        pulled.x.push_back(s.strain);
-        pulled.y.push_back(s.force_moving);
-        width.x.push_back(s.strain);
-        width.y.push_back(s.width);
-      }
-      const std::string label = std::string(file.knit ? file.knit->pattern + ", " : "") +
-                                stretch_direction_name(o.direction);
-      plot_series({pulled, fixed}, "nominal strain", "force along the pull (dyn)",
-                  "Stretch: " + label, (dir / "stretch_force.png").string());
-      plot_series({width}, "nominal strain", "width across the pull at the middle (cm)",
-                  "Width: " + label, (dir / "stretch_width.png").string());
-    }
-    if (o.render && o.write_frames && result.report.status == StepStatus::OK) {
-      const nlohmann::json renders = render_stretch(o.out_dir, result.curve, o.to_strain, o);
-      // the summary was written by the run: add where the pictures are
-      const fs::path summary_path = dir / "summary.json";
-      std::ifstream in(summary_path);
-      nlohmann::json summary = nlohmann::json::parse(in);
-      in.close();
-      summary["renders"] = renders;
-      write_file_atomic(summary_path.string(), summary.dump(2) + "\n");
-    }
-  }
+  if (!o.out_dir.empty())
+    write_stretch_outputs(o, result.curve, stretch_label(g.file, o.direction),
+                          result.report.status == StepStatus::OK);
   return result;
 }
 
@@ -398,7 +427,9 @@ std::string plot_stretch_runs(const std::vector<std::string>& dirs, const std::s
           (s.contains("pattern") && s["pattern"].is_string() ? s["pattern"].get<std::string>() + " "
                                                              : std::string()) +
           s["direction"].get<std::string>();
-      if (s.contains("speed_cm_s") && s["speed_cm_s"].is_number()) {
+      if (s.contains("model") && s["model"] == "sheet") {
+        label += ", sheet";
+      } else if (s.contains("speed_cm_s") && s["speed_cm_s"].is_number()) {
         std::ostringstream speed;
         speed << std::setprecision(3) << s["speed_cm_s"].get<double>();
         label += ", " + speed.str() + " cm/s";

@@ -14,6 +14,8 @@
 #include <string>
 #include <vector>
 
+#include "knit/io/state_file.hpp"
+#include "knit/model/model.hpp"
 #include "knit/model/params.hpp"
 #include "knit/solver/runner.hpp"
 
@@ -68,6 +70,42 @@ struct StretchResult {
   Eigen::Vector3d axis = Eigen::Vector3d::UnitX();  ///< pull direction (unit)
 };
 
+/// Throws std::invalid_argument naming the option when a StretchOptions field is out of
+/// range.
+void validate_stretch_options(const StretchOptions& options);
+
+/// What a stretch test of a relaxed knit holds and measures, before it runs: the knit,
+/// its two clamps (the control points they hold and their centres), the pull axis (from
+/// the fixed clamp's centre to the moving one's), the initial separation of the centres,
+/// the sample's normal (its direction of least spread) and the axis across the pull in the
+/// fabric.
+struct StretchGeometry {
+  StateFile file;
+  Clamp fixed, moving;
+  Eigen::VectorXd q0;  ///< the knit's control points as placed (cm)
+  double radius = 0;   ///< yarn radius (cm)
+  double separation = 0;
+  Eigen::Vector3d axis = Eigen::Vector3d::UnitX(), across = Eigen::Vector3d::UnitY(),
+                  normal = Eigen::Vector3d::UnitZ(), centroid = Eigen::Vector3d::Zero();
+  /// The sample's width across the pull (cm): the extent along `across` of the control
+  /// points within half a cm of the middle between the clamps, the moving one `moved` cm
+  /// along the axis, plus a yarn diameter.
+  double width(const Eigen::VectorXd& q, double moved) const;
+};
+
+/// Validates the sample against the options (stitch coordinates present, enough rows or
+/// columns for two clamps) and measures its geometry. Throws std::invalid_argument.
+StretchGeometry stretch_geometry(const std::string& kstate_path, const StretchOptions& options);
+
+/// "PATTERN, DIRECTION" for titles.
+std::string stretch_label(const StateFile& file, StretchDirection direction);
+
+/// After a run that wrote its summary (and frames) into options.out_dir: stretch.csv, the
+/// force and width plots titled with `label`, and, when `finished` and options.render, the
+/// renders and movie (listed in the summary's "renders").
+void write_stretch_outputs(const StretchOptions& options, const std::vector<StretchSample>& curve,
+                           const std::string& label, bool finished);
+
 /// Stretches the relaxed knit in `kstate_path` (written by `knitsim relax`). With out_dir,
 /// writes the run (frames, log.csv, final.kstate) and stretch.csv, a summary.json with
 /// the stretch measures (see stretch_measures) and stretch_force.png / stretch_width.png,
@@ -77,10 +115,10 @@ StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions&
 
 /// Measures of a curve, for the summary: initial_separation_cm, stiffness_small_strain
 /// (least-squares slope of the moving clamp's force against strain over the first tenth
-/// of the pull, dyn per unit strain), stiffness_end (over its last tenth), stiffening_strain
-/// (the first strain where the slope over a window of a tenth of the pull reaches three
-/// times the small-strain slope; null if never), work_erg (∫ F dx of the moving clamp over
-/// the whole run), max_force_dyn, width_change (width at the end of the pull over the
+/// of the pull, the rest sample at strain 0 left out, dyn per unit strain), stiffness_end (over its
+/// last tenth), stiffening_strain (the first strain where the slope over a window of a tenth of the
+/// pull reaches three times the small-strain slope; null if never), work_erg (∫ F dx of the moving
+/// clamp over the whole run), max_force_dyn, width_change (width at the end of the pull over the
 /// initial width, − 1).
 nlohmann::json stretch_measures(const std::vector<StretchSample>& curve, double to_strain,
                                 double initial_separation);

@@ -73,6 +73,8 @@ const char* status_word(StepStatus status) {
       return "projection_failed";
     case StepStatus::INTERRUPTED:
       return "interrupted";
+    case StepStatus::NOT_CONVERGED:
+      return "not_converged";
   }
   return "unknown";
 }

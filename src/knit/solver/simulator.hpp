@@ -25,7 +25,9 @@ namespace knit {
 
 /// How a step (or a run) ended. INTERRUPTED is a run's status only: a signal asked it to
 /// stop after a step that went well.
-enum class StepStatus { OK, NON_FINITE, PROJECTION_FAILED, INTERRUPTED };
+/// How a step or run ended. NOT_CONVERGED: a quasi-static solve (the elastic sheet's
+/// stretch test) did not reach equilibrium.
+enum class StepStatus { OK, NON_FINITE, PROJECTION_FAILED, INTERRUPTED, NOT_CONVERGED };
 
 struct StepResult {
   StepStatus status = StepStatus::OK;
