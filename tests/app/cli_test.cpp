@@ -344,4 +344,27 @@ TEST(Cli, ObjectCommandsRefuseBadRequests) {
   std::filesystem::remove_all(dir);
 }
 
+// the sheet's options need --sheet; a bad stiffness is refused naming it; a good request
+// writes the sheet's curve and summary
+TEST(Cli, SheetStretchRefusesBadRequestsAndRuns) {
+  const std::string knit = std::string(KNIT_EXAMPLES) + "/knits/stockinette_12x12.kstate";
+  const std::string dir = temp_dir("cli_sheet");
+  std::filesystem::remove_all(dir);
+  Result r = run("stretch --from " + knit + " --k-shear 5 --out " + dir);
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.output.find("need --sheet"), std::string::npos) << r.output;
+  r = run("stretch --from " + knit + " --sheet --k-shear -5 --out " + dir);
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.output.find("k_shear"), std::string::npos) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(dir));
+  r = run("stretch --from " + knit + " --sheet --to 0.1 --no-render -q --out " + dir);
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_TRUE(std::filesystem::exists(dir + "/stretch.csv"));
+  std::ifstream in(dir + "/summary.json");
+  const auto s = nlohmann::json::parse(in);
+  EXPECT_EQ(s["model"], "sheet");
+  EXPECT_GT(s["stretch"]["max_force_dyn"].get<double>(), 0.0);
+  std::filesystem::remove_all(dir);
+}
+
 }  // namespace
