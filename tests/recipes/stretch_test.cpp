@@ -66,8 +66,9 @@ TEST(Stretch, ForceRisesAndTheClampsBalance) {
   EXPECT_NO_THROW(t.column("force_moving_dyn", "stretch.csv"));
   std::ifstream in(o.out_dir + "/summary.json");
   const auto s = nlohmann::json::parse(in);
-  for (const char* key : {"initial_separation_cm", "stiffness_small_strain", "stiffness_end",
-                          "stiffening_strain", "work_erg", "max_force_dyn", "width_change"})
+  for (const char* key :
+       {"initial_separation_cm", "stiffness_small_strain", "stiffness_end", "stiffening_strain",
+        "work_erg", "max_force_dyn", "width_change", "edge_curl_start", "edge_curl_end"})
     EXPECT_TRUE(s["stretch"].contains(key)) << key;
   EXPECT_EQ(s["direction"], "course");
   EXPECT_EQ(s["pattern"], "stockinette");

@@ -9,6 +9,7 @@
 #include <map>
 #include <stdexcept>
 
+#include "knit/analysis/fabric_shape.hpp"
 #include "knit/io/run_dir.hpp"
 #include "knit/io/state_file.hpp"
 #include "knit/sheet/embedding.hpp"
@@ -255,6 +256,7 @@ StretchResult stretch_sheet(const std::string& kstate_path, const SheetStretchOp
     s.potential_energy = st.energy;
     s.kinetic_energy = 0;
     s.min_contact_distance = -1;
+    s.edge_curl = measure_fabric(g.model, q).edge_curl;
     result.curve.push_back(s);
     if (!o.out_dir.empty() && o.write_frames) {
       frame.state.q = q;

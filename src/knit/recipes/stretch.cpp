@@ -9,6 +9,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "knit/analysis/fabric_shape.hpp"
 #include "knit/io/plot.hpp"
 #include "knit/io/run_dir.hpp"
 #include "knit/io/state_file.hpp"
@@ -137,18 +138,22 @@ nlohmann::json stretch_measures(const std::vector<StretchSample>& curve, double 
   m["max_force_dyn"] = max_force;
   if (!curve.empty() && curve.front().width > 0)
     m["width_change"] = curve[n - 1].width / curve.front().width - 1;
+  if (!curve.empty()) {
+    m["edge_curl_start"] = curve.front().edge_curl;
+    m["edge_curl_end"] = curve[n - 1].edge_curl;
+  }
   return m;
 }
 
 void write_stretch_csv(const std::vector<StretchSample>& curve, const std::string& path) {
   std::ostringstream o;
   o << "time_s,strain,force_fixed_dyn,force_moving_dyn,width_cm,potential_energy_erg,"
-       "kinetic_energy_erg,min_contact_distance\n"
+       "kinetic_energy_erg,min_contact_distance,edge_curl\n"
     << std::setprecision(10);
   for (const StretchSample& s : curve)
     o << s.time << "," << s.strain << "," << s.force_fixed << "," << s.force_moving << ","
       << s.width << "," << s.potential_energy << "," << s.kinetic_energy << ","
-      << s.min_contact_distance << "\n";
+      << s.min_contact_distance << "," << s.edge_curl << "\n";
   write_file_atomic(path, o.str());
 }
 
@@ -261,6 +266,7 @@ StretchGeometry stretch_geometry(const std::string& kstate_path, const StretchOp
 
   // the clamps' centres give the pull axis and the initial separation
   const Scene probe = stretch_scene(kstate_path, o, nlohmann::json::array());
+  g.model = probe.model;
   g.fixed = probe.model.clamps[0];
   g.moving = probe.model.clamps[1];
   g.q0 = probe.state.q;
@@ -378,6 +384,7 @@ StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions&
     s.min_contact_distance = data.contact.present && std::isfinite(data.contact.min_distance_ratio)
                                  ? data.contact.min_distance_ratio
                                  : -1;
+    s.edge_curl = measure_fabric(scene.model, state.q).edge_curl;
     result.curve.push_back(s);
   };
 

@@ -60,6 +60,9 @@ struct StretchSample {
   double potential_energy = 0;      ///< erg
   double kinetic_energy = 0;        ///< erg
   double min_contact_distance = 0;  ///< d = distance / 2r over contact pairs (−1: none)
+  /// the edges' roll out of the fabric's plane, in stitch widths (FabricShape::edge_curl;
+  /// clamped edges are held flat, so a course pull shows the top and bottom edges' curl)
+  double edge_curl = 0;
 };
 
 struct StretchResult {
@@ -81,6 +84,7 @@ void validate_stretch_options(const StretchOptions& options);
 /// fabric.
 struct StretchGeometry {
   StateFile file;
+  Model model;  ///< the knit with the two clamps, as the yarn test builds it
   Clamp fixed, moving;
   Eigen::VectorXd q0;  ///< the knit's control points as placed (cm)
   double radius = 0;   ///< yarn radius (cm)
@@ -124,7 +128,7 @@ nlohmann::json stretch_measures(const std::vector<StretchSample>& curve, double 
                                 double initial_separation);
 
 /// Writes the samples as CSV: time_s, strain, force_fixed_dyn, force_moving_dyn, width_cm,
-/// potential_energy_erg, kinetic_energy_erg, min_contact_distance.
+/// potential_energy_erg, kinetic_energy_erg, min_contact_distance, edge_curl.
 void write_stretch_csv(const std::vector<StretchSample>& curve, const std::string& path);
 
 /// Draws the force–strain curves (moving clamp) of several stretch runs' directories in
