@@ -1,5 +1,6 @@
 #include "knit/recipes/sheet_stretch.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -70,9 +71,12 @@ StaticSample solve_at(const KnitSheet& ks, const StretchGeometry& g,
                                                       {"moving", ks.moving_nodes, {0, 0, 0}}};
   sheet::StaticSettings settings;
   settings.gravity.setZero();
-  settings.max_iterations = 200;
-  settings.force_tolerance = 1e-6;
-  settings.relative_tolerance = 1e-9;
+  settings.max_iterations = 2000;  // shear far stiffer than stretch converges slowly (Gauss–Newton)
+  // converged when the free nodes' force is a billionth of the stiffest modulus times the
+  // sample's size (dyn) or 1e-8 of where it started: round-off limits stiff sheets
+  const double k_max = std::max({material.k_stretch_u, material.k_stretch_v, material.k_shear});
+  settings.force_tolerance = 1e-9 * k_max * std::max(ks.width, ks.height);
+  settings.relative_tolerance = 1e-8;
   const sheet::StaticReport r = sheet::solve_static(ks.mesh, material, clamps, settings, state);
   StaticSample s;
   s.force_fixed = -r.reactions[0].dot(g.axis);
@@ -386,22 +390,30 @@ SheetFit fit_sheet_material(const std::string& kstate_path, const std::vector<st
       m.k_shear = ks_;
       return sheet_stiffness(ks, g, m, t.strain);
     };
-    double lo = 1e-6 * std::min(m.k_stretch_u, m.k_stretch_v),
-           hi = 1e3 * std::max(m.k_stretch_u, m.k_stretch_v);
-    const double s_lo = stiffness(lo), s_hi = stiffness(hi);
+    // bracket from below, a decade at a time (a sheet far stiffer in shear than in stretch
+    // converges slowly, so the bracket stops at the first decade that is stiff enough)
+    const double floor_k = 1e-4 * std::min(m.k_stretch_u, m.k_stretch_v),
+                 ceiling_k = 1e2 * std::max(m.k_stretch_u, m.k_stretch_v);
+    double lo = floor_k, hi = floor_k;
     nlohmann::json note;
-    if (t.stiffness <= s_lo) {
+    if (stiffness(lo) >= t.stiffness) {
+      note = "the yarn model's bias stiffness is below the sheet's with almost no shear stiffness";
       m.k_shear = lo;
-      note = "the yarn model's bias stiffness is below the sheet's with no shear stiffness";
-    } else if (t.stiffness >= s_hi) {
-      m.k_shear = hi;
-      note = "the yarn model's bias stiffness is above the sheet's with rigid shear";
     } else {
-      for (int i = 0; i < 60 && hi / lo > 1 + 1e-4; ++i) {
-        const double mid = std::sqrt(lo * hi);
-        (stiffness(mid) < t.stiffness ? lo : hi) = mid;
+      while (hi < ceiling_k && stiffness(hi) < t.stiffness) {
+        lo = hi;
+        hi *= 10;
       }
-      m.k_shear = std::sqrt(lo * hi);
+      if (hi >= ceiling_k) {
+        m.k_shear = ceiling_k;
+        note = "the yarn model's bias stiffness is above the sheet's with the stiffest shear tried";
+      } else {
+        for (int i = 0; i < 60 && hi / lo > 1 + 1e-4; ++i) {
+          const double mid = std::sqrt(lo * hi);
+          (stiffness(mid) < t.stiffness ? lo : hi) = mid;
+        }
+        m.k_shear = std::sqrt(lo * hi);
+      }
     }
     fit.material.k_shear = m.k_shear;
     fit.report["bias"] = {{"run", t.run},

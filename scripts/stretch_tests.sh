@@ -1,0 +1,77 @@
+#!/usr/bin/env bash
+# The stretch tests of the README, reproducible with one command: stockinette, garter and
+# 2×2 rib, each relaxed and pulled along the course, the wale and the bias with the yarn
+# model; then the elastic sheet (Baraff–Witkin), fitted to the stockinette's three runs at
+# small strain, pulled the same ways on each knit; one force–strain figure per direction
+# with every curve, and renders of each knit beside its sheet at the same strain.
+# Resumable: a relaxation or run that finished is kept, so run it again after an
+# interruption. Long (about an hour at 12×12 on 2 cores): run it in the background, e.g.
+#   nohup scripts/stretch_tests.sh > out/stretch.log 2>&1 &
+# Usage: scripts/stretch_tests.sh [--rows R] [--cols C] [--speed V] [--to E] [--wale-to E]
+#                                 [--threads N]
+# --to is the strain of the course and bias pulls (default 1), --wale-to the wale pull's
+# (default 0.6: a stockinette's loops jam at about 0.8 along the wale, where the
+# inextensible yarn stops the pull and the run ends unstable). A run that ends unstable
+# keeps its curve up to there and is not repeated.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+rows=12 cols=12 speed=1 to=1.0 wale_to=0.6 threads=0
+while [ $# -gt 0 ]; do
+  case $1 in
+    --rows) rows=$2; shift 2 ;;
+    --cols) cols=$2; shift 2 ;;
+    --speed) speed=$2; shift 2 ;;
+    --to) to=$2; shift 2 ;;
+    --wale-to) wale_to=$2; shift 2 ;;
+    --threads) threads=$2; shift 2 ;;
+    *) echo "stretch_tests: unknown option '$1'" >&2; exit 2 ;;
+  esac
+done
+[ -x build/knitsim ] || scripts/setup.sh
+k=./build/knitsim
+root=out/stretch/${rows}x${cols}
+mkdir -p "$root"
+done_ok() { [ -f "$1/summary.json" ] && grep -q '"status": "ok"' "$1/summary.json"; }
+# a run that ended (ok or unstable) and wrote its curve; an interrupted one goes again
+ended() { [ -f "$1/stretch.csv" ] && ! grep -q '"status": "interrupted"' "$1/summary.json"; }
+strain_of() { if [ "$1" = wale ]; then echo "$wale_to"; else echo "$to"; fi; }
+
+for p in stockinette garter rib2x2; do
+  relax=$root/${p}_relax
+  if [ ! -f "$relax/final.kstate" ] || ! done_ok "$relax"; then
+    $k relax $p --rows "$rows" --cols "$cols" --max-time 1 -j "$threads" -q --overwrite --out "$relax"
+  fi
+  knit=$relax/relaxed.kstate
+  [ -f "$knit" ] || knit=$relax/final.kstate
+  for d in course wale bias; do
+    run=$root/${p}_$d
+    ended "$run" || $k stretch --from "$knit" --direction $d --to "$(strain_of $d)" \
+      --speed "$speed" -j "$threads" -q --overwrite --out "$run" || true
+  done
+done
+
+# the sheet: fitted once to the stockinette, then given every knit's geometry
+fit=$root/stockinette_course,$root/stockinette_wale,$root/stockinette_bias
+for p in stockinette garter rib2x2; do
+  knit=$root/${p}_relax/relaxed.kstate
+  [ -f "$knit" ] || knit=$root/${p}_relax/final.kstate
+  for d in course wale bias; do
+    run=$root/${p}_${d}_sheet
+    ended "$run" || $k stretch --from "$knit" --sheet --fit "$fit" --direction $d \
+      --to "$(strain_of $d)" --speed "$speed" -q --overwrite --out "$run" || true
+  done
+done
+
+for d in course wale bias; do
+  $k stretch $root/stockinette_$d $root/garter_$d $root/rib2x2_$d \
+    $root/stockinette_${d}_sheet $root/garter_${d}_sheet $root/rib2x2_${d}_sheet \
+    --plot "$root/curves_$d.png"
+done
+# each knit beside its sheet at the end of the course pull
+for p in stockinette garter rib2x2; do
+  last=$(ls $root/${p}_course/frames/*.kstate | sort | tail -n 1)
+  slast=$(ls $root/${p}_course_sheet/frames/*.kstate | sort | tail -n 1)
+  $k render --compare "$last" "$slast" --labels "$p yarn,$p sheet" --color-rows \
+    --size 800x600 --out "$root/${p}_course_yarn_vs_sheet.png"
+done
+echo "stretch_tests: curves in $root/curves_{course,wale,bias}.png, renders in $root/*_yarn_vs_sheet.png"
