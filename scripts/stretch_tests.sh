@@ -50,14 +50,23 @@ for p in stockinette garter rib2x2; do
   done
 done
 
-# the sheet: fitted once to the stockinette, then given every knit's geometry
+# the sheet: fitted once to the stockinette (its course run does the fit), then given
+# every knit's geometry with the fitted stiffnesses
 fit=$root/stockinette_course,$root/stockinette_wale,$root/stockinette_bias
+knit=$root/stockinette_relax/relaxed.kstate
+[ -f "$knit" ] || knit=$root/stockinette_relax/final.kstate
+first=$root/stockinette_course_sheet
+ended "$first" || $k stretch --from "$knit" --sheet --fit "$fit" --direction course --to "$to" \
+  --speed "$speed" -q --overwrite --out "$first"
+fitted() { grep -o "\"$1\": [0-9.e+-]*" "$first/summary.json" | head -n 1 | cut -d' ' -f2; }
+material=(--k-course "$(fitted k_stretch_u_dyn_per_cm)" --k-wale "$(fitted k_stretch_v_dyn_per_cm)"
+          --k-shear "$(fitted k_shear_dyn_per_cm)")
 for p in stockinette garter rib2x2; do
   knit=$root/${p}_relax/relaxed.kstate
   [ -f "$knit" ] || knit=$root/${p}_relax/final.kstate
   for d in course wale bias; do
     run=$root/${p}_${d}_sheet
-    ended "$run" || $k stretch --from "$knit" --sheet --fit "$fit" --direction $d \
+    ended "$run" || $k stretch --from "$knit" --sheet "${material[@]}" --direction $d \
       --to "$(strain_of $d)" --speed "$speed" -q --overwrite --out "$run" || true
   done
 done
