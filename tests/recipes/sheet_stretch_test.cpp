@@ -10,9 +10,9 @@
 #include <map>
 
 #include "knit/io/state_file.hpp"
-#include "knit/recipes/relax_knit.hpp"
 #include "knit/sheet/embedding.hpp"
 #include "knit/sheet/sheet_solver.hpp"
+#include "recipes/relaxed_sample.hpp"
 
 namespace knit {
 namespace {
@@ -21,17 +21,7 @@ namespace fs = std::filesystem;
 
 // a 6×7 stockinette relaxed for 0.1 s, written as `knitsim relax` writes it
 std::string relaxed_sample() {
-  static const std::string path = [] {
-    RelaxKnitOptions o;
-    o.knit.rows = 6;
-    o.knit.cols = 7;
-    o.run.max_time = 0.1;
-    o.run.progress = false;
-    const RelaxResult r = relax_knit("stockinette", o);
-    const std::string p = (fs::path(::testing::TempDir()) / "sheet_sample.kstate").string();
-    write_state_file(p, make_state_file(r.model, r.state));
-    return p;
-  }();
+  static const std::string path = write_relaxed_stockinette(6, 7, "sheet_sample.kstate");
   return path;
 }
 

@@ -11,7 +11,7 @@
 #include "knit/io/plot.hpp"
 #include "knit/io/process.hpp"
 #include "knit/io/state_file.hpp"
-#include "knit/recipes/relax_knit.hpp"
+#include "recipes/relaxed_sample.hpp"
 
 namespace knit {
 namespace {
@@ -20,17 +20,7 @@ namespace fs = std::filesystem;
 
 // a 5×6 stockinette relaxed for 0.1 s, written as `knitsim relax` writes it
 std::string relaxed_sample() {
-  static const std::string path = [] {
-    RelaxKnitOptions o;
-    o.knit.rows = 5;
-    o.knit.cols = 6;
-    o.run.max_time = 0.1;
-    o.run.progress = false;
-    const RelaxResult r = relax_knit("stockinette", o);
-    const std::string p = (fs::path(::testing::TempDir()) / "stretch_sample.kstate").string();
-    write_state_file(p, make_state_file(r.model, r.state));
-    return p;
-  }();
+  static const std::string path = write_relaxed_stockinette(5, 6, "stretch_sample.kstate");
   return path;
 }
 

@@ -239,6 +239,7 @@ StretchResult stretch_sheet(const std::string& kstate_path, const SheetStretchOp
   sheet::SheetState state = sheet::rest_state(ks.mesh);
   int newton = 0, failed = 0;
   StateFile frame = g.file;
+  double path = 0;  // strain travelled by the moving clamp so far
   for (size_t i = 0; i < strains.size(); ++i) {
     const double e = strains[i];
     StaticSample st;
@@ -250,8 +251,7 @@ StretchResult stretch_sheet(const std::string& kstate_path, const SheetStretchOp
     const Eigen::VectorXd q = yarn.reshaped();
     StretchSample s;
     // nominal time: the yarn test's clamp speed over the path travelled so far
-    double path = 0;
-    for (size_t k = 1; k <= i; ++k) path += std::abs(strains[k] - strains[k - 1]);
+    if (i > 0) path += std::abs(strains[i] - strains[i - 1]);
     s.time = path * g.separation / o.speed;
     s.strain = e;
     s.force_fixed = st.force_fixed;
