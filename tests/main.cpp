@@ -13,8 +13,7 @@
 int main(int argc, char** argv) {
   namespace fs = std::filesystem;
   std::error_code ec;
-  const fs::path dir =
-      fs::temp_directory_path(ec) / ("knitsim-tests-" + std::to_string(getpid()));
+  const fs::path dir = fs::temp_directory_path(ec) / ("knitsim-tests-" + std::to_string(getpid()));
   fs::remove_all(dir, ec);
   const bool own = !ec && fs::create_directories(dir, ec) && !ec;
   if (own) {

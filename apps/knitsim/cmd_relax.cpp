@@ -10,6 +10,7 @@
 #include "common.hpp"
 #include "knit/io/run_dir.hpp"
 #include "knit/io/state_file.hpp"
+#include "knit/pattern/knitout.hpp"
 #include "knit/recipes/relax_knit.hpp"
 
 namespace knitsim {
@@ -32,7 +33,8 @@ void register_relax(CLI::App& app) {
       app.add_subcommand("relax", "build a knit pattern's interlocked yarn and relax it to rest");
   cmd->add_option("pattern", o->pattern,
                   "built-in pattern (stockinette, garter, rib2x2, rib1x1, seed, "
-                  "reverse_stockinette) or a chart file (k/p per stitch, last line = row 0)");
+                  "reverse_stockinette), a chart file (k/p per stitch, last line = row 0) or a "
+                  "knitout program (.k: its size and flat/round are the program's)");
   cmd->add_option("--from", o->from,
                   "relax yarns imported from a .yarns, .bcc or .obj file instead of a pattern");
   cmd->add_option("--resume", o->resume,
@@ -114,6 +116,13 @@ void register_relax(CLI::App& app) {
     }
     if (o->from.empty() == o->pattern.empty())
       throw std::invalid_argument("relax: give either a PATTERN or --from FILE");
+    if (o->resume.empty() && knit::is_knitout_path(o->pattern)) {
+      // a knitting-machine program knits what it says: its size is the default
+      const knit::KnitoutPiece piece = knit::load_knitout(o->pattern);
+      if (!given("--rows")) o->knit.knit.rows = piece.rows();
+      if (!given("--cols")) o->knit.knit.cols = piece.cols();
+      if (!given("--round")) o->knit.knit.in_the_round = piece.in_the_round;
+    }
     o->run.out_dir = o->out;
     o->run.overwrite = o->overwrite;
     o->run.continue_in_place = knit::resumes_in_place(o->resume, o->out);

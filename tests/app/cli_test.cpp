@@ -368,3 +368,35 @@ TEST(Cli, SheetStretchRefusesBadRequestsAndRuns) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST(Cli, RelaxesAKnitoutProgramAtItsSizeAndRefusesWhatItCannotKnit) {
+  const std::string yarns = std::string(KNIT_TEST_DATA) + "/yarns/";
+  const std::string out = temp_dir("cli_knitout");
+  const Result r =
+      run("relax " + yarns + "swatch4x4garter.k --max-time 0.001 --quiet --out " + out);
+  ASSERT_EQ(r.code, 0) << r.output;
+  const auto f = knit::read_state_file(out + "/relaxed.kstate");
+  ASSERT_TRUE(f.knit.has_value());
+  EXPECT_EQ(f.knit->rows, 4);
+  EXPECT_EQ(f.knit->cols, 4);
+  EXPECT_FALSE(f.knit->in_the_round);
+  // another size than the program's
+  const std::string out2 = temp_dir("cli_knitout_size");
+  const Result size = run("relax " + yarns + "swatch4x4.k --cols 6 --out " + out2);
+  EXPECT_EQ(size.code, 1);
+  EXPECT_NE(size.output.find("the program knits 4 rows × 4 columns flat"), std::string::npos)
+      << size.output;
+  EXPECT_FALSE(fs::exists(out2));
+  // a transfer
+  const std::string prog = ::testing::TempDir() + "/cli_xfer.k";
+  std::ofstream(prog) << ";!knitout-2\nin 3\nknit + f1 3\nknit + f2 3\nxfer f2 b2\n";
+  const Result xfer = run("relax " + prog + " --out " + out2);
+  EXPECT_EQ(xfer.code, 1);
+  EXPECT_NE(xfer.output.find("cli_xfer.k:5: 'xfer f2 b2': transfers"), std::string::npos)
+      << xfer.output;
+  EXPECT_FALSE(fs::exists(out2));
+}
+
+}  // namespace

@@ -1,6 +1,7 @@
 #include "knit/pattern/pattern.hpp"
 
 #include "knit/io/input_file.hpp"
+#include "knit/pattern/knitout.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -108,6 +109,7 @@ Pattern load_pattern(const std::string& name_or_path) {
     throw std::invalid_argument("pattern '" + name_or_path + "': not a built-in pattern (" + list +
                                 ") and no chart file exists at that path");
   }
+  if (is_knitout_path(name_or_path)) return load_knitout(name_or_path).pattern;
   std::string text;
   try {
     text = read_input_file(name_or_path, MAX_CHART_BYTES, "chart file");

@@ -36,8 +36,9 @@ Pattern builtin_pattern(std::string_view name);
 /// Names accepted by builtin_pattern, in a fixed order.
 std::vector<std::string> builtin_pattern_names();
 
-/// A built-in pattern by name, or else a chart file (parse_chart). Throws naming the
-/// argument when it is neither.
+/// A built-in pattern by name, or else a knitout program (a path ending in ".k": its
+/// stitches, knitout.hpp) or a chart file (parse_chart). Throws naming the argument when it
+/// is none of them.
 Pattern load_pattern(const std::string& name_or_path);
 
 /// Repeats `pattern` to fill rows × cols: result(r, c) = pattern(r mod R, c mod C).

@@ -10,6 +10,7 @@
 #include "knit/io/input_file.hpp"
 #include "knit/io/run_dir.hpp"
 #include "knit/io/state_file.hpp"
+#include "knit/pattern/knitout.hpp"
 #include "knit/pattern/pattern.hpp"
 
 namespace knit {
@@ -102,6 +103,21 @@ void check_knit_relaxation(const KnitOptions& k, double shrink, const Params& pa
                                 " available");
 }
 
+void check_knitout_size(const std::string& pattern, const KnitOptions& knit) {
+  if (!is_knitout_path(pattern) || !std::filesystem::exists(pattern)) return;
+  const KnitoutPiece piece = load_knitout(pattern);
+  if (piece.rows() != knit.rows || piece.cols() != knit.cols ||
+      piece.in_the_round != knit.in_the_round) {
+    const std::string size = std::to_string(piece.rows()) + " rows × " +
+                             std::to_string(piece.cols()) + " columns " +
+                             (piece.in_the_round ? "in the round" : "flat");
+    throw std::invalid_argument(pattern + ": the program knits " + size +
+                                "; relax it at that size (rows " + std::to_string(piece.rows()) +
+                                ", cols " + std::to_string(piece.cols()) +
+                                (piece.in_the_round ? ", in the round)" : ", flat)"));
+  }
+}
+
 State read_resumed_knit_state(const std::string& path, const std::string& pattern,
                               const KnitOptions& options) {
   const GeneratedKnit knit = generate_knit(load_pattern(pattern), options);
@@ -159,6 +175,7 @@ KnitRelaxation setup_knit_relaxation(const std::string& pattern_name, const Rela
   validate_params(o.params);
   validate_relax_options(o.run, o.params.solver.time_step);
   check_knit_relaxation(o.knit, o.shrink, o.params);
+  check_knitout_size(pattern_name, o.knit);
   KnitRelaxation r;
   r.knit = generate_knit(load_pattern(pattern_name), o.knit);
   Model model = build_knit_model(r.knit, o.params, o.shrink, o.glue_close_time);

@@ -83,6 +83,11 @@ void check_shrink(double shrink);
 /// whose estimated memory fits in the machine's available memory.
 void check_knit_relaxation(const KnitOptions& knit, double shrink, const Params& params);
 
+/// Throws std::invalid_argument when `pattern` is a knitout program (knitout.hpp) and the
+/// knit options ask for another size or flat/round than it knits: a program is knitted as
+/// written, never repeated or cut.
+void check_knitout_size(const std::string& pattern, const KnitOptions& knit);
+
 /// The set-up of relax_knit without the run: the generated knit, the simulator (model
 /// with shrunk rest lengths and closing glues, model.knit set, non-rigid damping filter)
 /// and the state to start from. For tests and callers that step by hand.

@@ -1,0 +1,154 @@
+// Knitout programs read into the chart and size the generator knits, and everything the
+// generator cannot knit refused with the line and instruction.
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "knit/pattern/knitout.hpp"
+#include "knit/recipes/relax_knit.hpp"
+
+namespace knit {
+namespace {
+
+const std::string YARNS = std::string(KNIT_TEST_DATA) + "/yarns/";
+
+std::string rows_of(const KnitoutPiece& p) {
+  std::string out;
+  for (int r = p.rows() - 1; r >= 0; --r) out += p.pattern.rows[r] + (r ? "/" : "");
+  return out;
+}
+
+std::string refusal(const std::string& program) {
+  try {
+    parse_knitout(program, "prog.k");
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "(accepted)";
+}
+
+// a flat program: cast on needles 1..n with tucks, then `rows` passes of `stitch` ops
+std::string flat(int n, const std::vector<std::string>& rows) {
+  std::string s = ";!knitout-2\n;;Carriers: 1 2 3\ninhook 3\n";
+  for (int k = n; k >= 1; --k) s += "tuck - f" + std::to_string(k) + " 3\n";
+  s += "releasehook 3\n";
+  for (size_t r = 0; r < rows.size(); ++r) {
+    const bool right = r % 2 == 0;
+    for (int k = 0; k < n; ++k) {
+      const int needle = right ? k + 1 : n - k;
+      const char st = rows[r][static_cast<size_t>(needle - 1)];
+      // 'k': knit on the front bed, 'p': purl on the front bed, 'b': knit on the back bed
+      const std::string op = st == 'k' ? "knit" : st == 'p' ? "purl" : "knit";
+      const std::string bed = st == 'b' ? "b" : "f";
+      s += op + (right ? " + " : " - ") + bed + std::to_string(needle) + " 3\n";
+    }
+  }
+  return s + "outhook 3\n";
+}
+
+TEST(Knitout, TheShippedSwatchesReadAsTheirCharts) {
+  const KnitoutPiece st = load_knitout(YARNS + "swatch4x4.k");
+  EXPECT_FALSE(st.in_the_round);
+  EXPECT_EQ(rows_of(st), "kkkk/kkkk/kkkk/kkkk");
+  // garter: the program purls every second row
+  EXPECT_EQ(rows_of(load_knitout(YARNS + "swatch4x4garter.k")), "pppp/kkkk/pppp/kkkk");
+  // the "ribbing" program knits one and purls one, starting each pass with a knit at the
+  // needle it turns on: read as a machine knits it (the front bed always faces the front),
+  // its columns alternate k and p from row to row, a seed stitch, 12 stitches by 8 rows
+  const KnitoutPiece rib = load_knitout(YARNS + "swatch12x8ribbing.k");
+  ASSERT_EQ(rib.rows(), 8);
+  ASSERT_EQ(rib.cols(), 12);
+  for (int r = 0; r < 8; ++r)
+    EXPECT_EQ(rib.pattern.rows[r], r % 2 ? "pkpkpkpkpkpk" : "kpkpkpkpkpkp") << r;
+  // double moss: k2 p2, shifted by two every second row
+  const KnitoutPiece moss = load_knitout(YARNS + "swatch6x8doublemoss.k");
+  EXPECT_EQ(moss.rows(), 8);
+  EXPECT_EQ(moss.cols(), 6);
+  EXPECT_EQ(moss.pattern.rows[0], "kkppkk");
+  EXPECT_EQ(moss.pattern.rows[1], "kkppkk");
+  EXPECT_EQ(moss.pattern.rows[2], "ppkkpp");
+}
+
+TEST(Knitout, BackBedStitchesArePurlsSeenFromTheFront) {
+  // a V-bed rib: knit on the front bed for the knit columns, on the back bed for the purls
+  const KnitoutPiece p = parse_knitout(flat(4, {"kbkb", "kbkb", "kbkb"}), "rib.k");
+  EXPECT_FALSE(p.in_the_round);
+  EXPECT_EQ(rows_of(p), "kpkp/kpkp/kpkp");
+}
+
+TEST(Knitout, ATubeOnBothBedsIsKnitInTheRound) {
+  std::string s = ";!knitout-2\nin 5\n";
+  for (int r = 0; r < 3; ++r) {
+    for (int k = 1; k <= 4; ++k) s += "knit + f" + std::to_string(k) + " 5\n";
+    for (int k = 4; k >= 1; --k)
+      s += (r == 1 ? "purl - b" : "knit - b") + std::to_string(k) + " 5\n";
+  }
+  s += "out 5\n";
+  const KnitoutPiece p = parse_knitout(s, "tube.k");
+  EXPECT_TRUE(p.in_the_round);
+  ASSERT_EQ(p.cols(), 8);
+  // seen from outside, a knit on either bed is a knit; the purls of round 1's back half
+  EXPECT_EQ(rows_of(p), "kkkkkkkk/kkkkpppp/kkkkkkkk");
+}
+
+TEST(Knitout, WhatCannotBeKnitYetIsRefusedWithItsLine) {
+  const std::string head = ";!knitout-2\nin 3\nknit + f1 3\nknit + f2 3\n";
+  struct Case {
+    std::string program, expect;
+  };
+  const std::vector<Case> cases = {
+      {"knit + f1 3\n", "prog.k:1: not a knitout program"},
+      {head + "xfer f1 b1\n", "prog.k:5: 'xfer f1 b1': transfers"},
+      {head + "split + f1 b1 3\n", "prog.k:5: 'split + f1 b1 3': transfers"},
+      {head + "rack 1\n", "prog.k:5: 'rack 1': racking"},
+      {head + "rack 0\nknit - f2 3\nknit - f1 3\n", "(accepted)"},
+      {head + "knit - f2 4\n", "prog.k:5: 'knit - f2 4': a second carrier (4, after 3)"},
+      {head + "knit - f2 3 4\n", "several carriers"},
+      {head + "knit - f2\n", "no carrier given"},
+      {head + "tuck - f2 3\n", "prog.k:5: 'tuck - f2 3': tucks after the cast-on"},
+      {head + "drop f1\n", "prog.k:5: 'drop f1': 'drop' is not supported yet"},
+      {head + "knit - fs2 3\n", "sliders (fs2)"},
+      {head + "knit - x2 3\n", "expected a needle such as f12 or b3, got 'x2'"},
+      {head + "knit ^ f2 3\n", "expected 'knit +|- NEEDLE CARRIER'"},
+      {head + "frobnicate\n", "prog.k:5: 'frobnicate': unknown instruction 'frobnicate'"},
+      {head + "knit - f2 3\n", "prog.k:5: the last row has 1 of the piece's 2 stitches"},
+      {head + "knit - f2 3\nknit - f2 3\n", "prog.k:6: 'knit f2': row 1 does not go over"},
+      {";!knitout-2\nin 3\n", "prog.k:2: the program knits no stitches"},
+      {";!knitout-2\nknit + f1 3\nknit + f2 3\nknit - b1 3\n",
+       "a tube needs its needles on both beds"},
+  };
+  for (const Case& c : cases) {
+    const std::string got = refusal(c.program);
+    EXPECT_NE(got.find(c.expect), std::string::npos) << c.program << "\n→ " << got;
+  }
+  // machine settings do not change what is knitted
+  EXPECT_EQ(refusal(head + "x-stitch-number 5\npause\nstitch 30 40\nmiss - f3 3\n"), "(accepted)");
+}
+
+TEST(Knitout, AProgramIsRelaxedAtItsOwnSize) {
+  KnitOptions k;
+  k.rows = 4;
+  k.cols = 4;
+  EXPECT_NO_THROW(check_knitout_size(YARNS + "swatch4x4garter.k", k));
+  k.cols = 5;
+  try {
+    check_knitout_size(YARNS + "swatch4x4garter.k", k);
+    FAIL() << "a 4 × 5 relaxation of a 4 × 4 program was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("the program knits 4 rows × 4 columns flat"),
+              std::string::npos)
+        << e.what();
+  }
+  // and the relaxation knits the program's chart: garter's rows alternate
+  RelaxKnitOptions o;
+  o.knit.rows = 4;
+  o.knit.cols = 4;
+  o.run.max_time = 5 * o.params.solver.time_step;
+  o.run.progress = false;
+  const RelaxResult r = relax_knit(YARNS + "swatch4x4garter.k", o);
+  EXPECT_EQ(r.model.knit->pattern, YARNS + "swatch4x4garter.k");
+  EXPECT_EQ(r.report.status, StepStatus::OK);
+}
+
+}  // namespace
+}  // namespace knit
