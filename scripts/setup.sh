@@ -11,6 +11,7 @@ packages=(
   libpng-dev zlib1g-dev libstb-dev libgtest-dev libgmock-dev libbenchmark-dev
   libopenvdb-dev libboost-iostreams-dev
   ffmpeg gnuplot-nox clang-format
+  python3-dev python3-numpy pybind11-dev
 )
 bash scripts/apt-install.sh --why setup "${packages[@]}"
 [ "${1:-}" != --install-only ] || exit 0
@@ -25,4 +26,17 @@ if ! cmake --build "$build_dir" -j "$jobs" >"$build_dir/build.log" 2>&1; then
   cat "$build_dir/build.log"
   echo "setup: build failed (log: $build_dir/build.log)" >&2
   exit 1
+fi
+
+# the Python module, for Debian's python3 (`import knitsim` from anywhere): copied into its
+# site-packages folder for local modules; PYTHONPATH=build/python works without it
+module=$(ls "$build_dir"/python/knitsim*.so 2>/dev/null | head -n 1 || true)
+if [ -n "$module" ]; then
+  site=$(/usr/bin/python3 -c 'import sysconfig; print(sysconfig.get_path("platlib"))')
+  sudo_cmd=()
+  [ "$(id -u)" -eq 0 ] || sudo_cmd=(sudo)
+  if ! { "${sudo_cmd[@]}" mkdir -p "$site" && "${sudo_cmd[@]}" install -m 644 "$module" "$site/"; }; then
+    echo "setup: could not install the Python module into $site;" \
+      "use PYTHONPATH=$build_dir/python" >&2
+  fi
 fi

@@ -6,6 +6,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/setup.sh
+# pytest runs the Python module's suite (python/tests) as one of the tests
+bash scripts/apt-install.sh --why test python3-pytest
 if [ "${KNIT_SKIP_BLENDER:-0}" = 0 ]; then
   bash scripts/apt-install.sh --why test blender
 fi

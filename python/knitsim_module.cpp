@@ -1,0 +1,564 @@
+// The Python module `knitsim`: the library's recipes (relax a knit, stretch it, run a
+// scene) and its core (Model, State, Simulator, StepData) for Debian's python3 with numpy.
+//
+// Arrays: State.q and State.v are numpy views of the state's own memory, shape (num_cp, 3)
+// (writing into them changes the state); everything else is a fresh array or dict.
+// Errors: the library's messages, unchanged — std::invalid_argument becomes ValueError,
+// InputError (bad scene or file contents) ValueError, other std::runtime_error
+// RuntimeError; a step that fails raises knitsim.StepError (a RuntimeError) and leaves the
+// state as it was.
+// Long calls (relax, stretch, run, step) release the GIL; Ctrl-C ends a relax, stretch or
+// run after the current step as `knitsim relax` does (status "interrupted"), and then
+// raises KeyboardInterrupt.
+#include <pybind11/functional.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+#include <tbb/global_control.h>
+
+#include <csignal>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "knit/analysis/fabric_shape.hpp"
+#include "knit/io/state_file.hpp"
+#include "knit/pattern/knitout.hpp"
+#include "knit/recipes/relax_knit.hpp"
+#include "knit/recipes/simulate_scene.hpp"
+#include "knit/recipes/stretch.hpp"
+#include "knit/scene/json_reader.hpp"
+#include "knit/scene/scene.hpp"
+#include "knit/solver/interrupt.hpp"
+#include "knit/solver/runner.hpp"
+#include "knit/solver/simulator.hpp"
+
+namespace py = pybind11;
+using namespace pybind11::literals;
+
+namespace knit {
+namespace {
+
+// ---------------------------------------------------------------- conversions
+
+py::object to_python(const nlohmann::json& j) {
+  return py::module_::import("json").attr("loads")(j.dump());
+}
+
+nlohmann::json to_json(const py::handle& obj) {
+  const std::string text = py::str(py::module_::import("json").attr("dumps")(obj));
+  return nlohmann::json::parse(text);
+}
+
+py::array_t<double> vec3(const Eigen::Vector3d& v) {
+  py::array_t<double> a(3);
+  for (int c = 0; c < 3; ++c) a.mutable_at(c) = v[c];
+  return a;
+}
+
+// a (n, 3) view of a stacked xyz vector whose memory `owner` keeps alive
+py::array_t<double> xyz_view(Eigen::VectorXd& x, py::handle owner) {
+  const auto n = static_cast<py::ssize_t>(x.size() / 3);
+  return py::array_t<double>({n, py::ssize_t{3}},
+                             {py::ssize_t{3 * sizeof(double)}, py::ssize_t{sizeof(double)}},
+                             x.data(), owner);
+}
+
+// a stacked xyz vector from an (n, 3) or flat array of 3n numbers
+Eigen::VectorXd xyz_from(const py::array_t<double, py::array::c_style | py::array::forcecast>& a,
+                         const char* what) {
+  if (!((a.ndim() == 2 && a.shape(1) == 3) || (a.ndim() == 1 && a.shape(0) % 3 == 0)))
+    throw std::invalid_argument(std::string(what) +
+                                ": expected an (n, 3) array or a flat one of 3n numbers");
+  Eigen::VectorXd x(a.size());
+  std::copy(a.data(), a.data() + a.size(), x.data());
+  return x;
+}
+
+void assign_xyz(Eigen::VectorXd& x,
+                const py::array_t<double, py::array::c_style | py::array::forcecast>& a,
+                const char* what) {
+  Eigen::VectorXd y = xyz_from(a, what);
+  if (x.size() && y.size() != x.size())
+    throw std::invalid_argument(std::string(what) + ": " + std::to_string(y.size() / 3) +
+                                " points for a state of " + std::to_string(x.size() / 3));
+  x = std::move(y);
+}
+
+py::array_t<int> stitch_array(const std::vector<StitchCoord>& stitch) {
+  py::array_t<int> a({static_cast<py::ssize_t>(stitch.size()), py::ssize_t{2}});
+  auto m = a.mutable_unchecked<2>();
+  for (size_t i = 0; i < stitch.size(); ++i) {
+    m(i, 0) = stitch[i].row;
+    m(i, 1) = stitch[i].col;
+  }
+  return a;
+}
+
+py::dict knit_info(const std::optional<KnitInfo>& k) {
+  py::dict d;
+  if (!k) return d;
+  d["pattern"] = k->pattern;
+  d["rows"] = k->rows;
+  d["cols"] = k->cols;
+  d["in_the_round"] = k->in_the_round;
+  d["segments_per_stitch"] = k->segments_per_stitch;
+  d["stitch_size_cm"] = k->stitch_size_cm;
+  d["shrink"] = k->shrink;
+  return d;
+}
+
+Params params_over(const Params& base, const py::object& overrides, const char* where) {
+  if (overrides.is_none()) return base;
+  const nlohmann::json j = to_json(overrides);
+  return parse_params(JsonReader(j, where, "params"), base);
+}
+
+// ---------------------------------------------------------------- step data
+
+py::dict contact_dict(const ContactRecord& c) {
+  const auto n = static_cast<py::ssize_t>(c.pairs.size());
+  py::array_t<int> seg_i(n), seg_j(n);
+  py::array_t<double> d(n), force(n), normal({n, py::ssize_t{3}});
+  auto nm = normal.mutable_unchecked<2>();
+  for (py::ssize_t k = 0; k < n; ++k) {
+    const ContactPairRecord& p = c.pairs[k];
+    seg_i.mutable_at(k) = p.seg_i;
+    seg_j.mutable_at(k) = p.seg_j;
+    d.mutable_at(k) = p.d;
+    force.mutable_at(k) = p.normal_force;
+    for (int a = 0; a < 3; ++a) nm(k, a) = p.normal[a];
+  }
+  return py::dict("present"_a = c.present, "candidate_segment_pairs"_a = c.candidate_segment_pairs,
+                  "point_pairs_tested"_a = c.point_pairs_tested,
+                  "point_pairs_in_contact"_a = c.point_pairs_in_contact,
+                  "min_distance_ratio"_a = c.min_distance_ratio, "seg_i"_a = seg_i,
+                  "seg_j"_a = seg_j, "d"_a = d, "normal"_a = normal, "normal_force"_a = force);
+}
+
+// StepData as plain Python values: numbers, dicts and numpy arrays
+py::dict step_data_dict(const StepData& s) {
+  py::dict energies, term_forces, stages;
+  for (const TermRecord& t : s.terms) {
+    energies[py::str(t.name)] = t.energy;
+    term_forces[py::str(t.name)] = vec3(t.net_force);
+  }
+  for (const auto& [name, seconds] : s.stage_seconds) stages[py::str(name)] = seconds;
+  py::list constraints, objects;
+  for (const ConstraintRecord& c : s.constraints) {
+    py::array_t<double> mult(c.multipliers.size());
+    std::copy(c.multipliers.data(), c.multipliers.data() + c.multipliers.size(),
+              mult.mutable_data());
+    constraints.append(py::dict("name"_a = c.name, "kind"_a = c.kind, "rows"_a = c.rows,
+                                "force"_a = vec3(c.force), "torque"_a = vec3(c.torque),
+                                "about"_a = vec3(c.about), "max_violation"_a = c.max_violation,
+                                "multipliers"_a = mult));
+  }
+  for (const ObjectRecord& o : s.objects)
+    objects.append(py::dict("name"_a = o.name, "points_in_contact"_a = o.points_in_contact,
+                            "deepest_penetration"_a = o.deepest_penetration,
+                            "force"_a = vec3(o.force)));
+  return py::dict("steps"_a = s.steps, "time"_a = s.time, "kinetic_energy"_a = s.kinetic_energy,
+                  "potential_energy"_a = s.potential_energy, "energies"_a = energies,
+                  "term_forces"_a = term_forces, "contact"_a = contact_dict(s.contact),
+                  "objects"_a = objects, "max_violation"_a = s.max_violation,
+                  "projection"_a = py::dict("converged"_a = s.projection.converged,
+                                            "iterations"_a = s.projection.iterations,
+                                            "residual"_a = s.projection.residual),
+                  "constraints"_a = constraints, "stage_seconds"_a = stages,
+                  "warnings"_a = s.warnings);
+}
+
+// ---------------------------------------------------------------- runs
+
+// Runs `body` without the GIL, with Ctrl-C ending the run after the current step; raises
+// KeyboardInterrupt afterwards when that happened.
+template <class F>
+auto run_interruptible(F&& body) {
+  clear_interrupt();
+  std::optional<decltype(body())> result;
+  {
+    InterruptHandler handler;
+    py::gil_scoped_release release;
+    result.emplace(body());
+  }
+  const int signal = interrupt_signal();
+  clear_interrupt();
+  if (signal == SIGINT) {
+    PyErr_SetNone(PyExc_KeyboardInterrupt);
+    throw py::error_already_set();
+  }
+  return std::move(*result);
+}
+
+py::dict report_dict(const RunReport& r) {
+  return py::dict("status"_a = status_word(r.status), "message"_a = r.message, "steps"_a = r.steps,
+                  "summary"_a = to_python(r.summary));
+}
+
+// the knit a relaxation produced: model, last state and report
+struct Knit {
+  RelaxResult result;
+};
+
+// a step that failed (Python: knitsim.StepError)
+struct StepFailed : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+std::unique_ptr<tbb::global_control> g_threads;
+
+}  // namespace
+}  // namespace knit
+
+PYBIND11_MODULE(knitsim, m) {
+  using namespace knit;
+  m.doc() =
+      "knitsim: yarn-level simulation of knitted cloth (units cm, g, s).\n\n"
+      "  k = knitsim.relax('stockinette', rows=12, cols=12)   # generate and relax\n"
+      "  k.shape['stitch_width_cm'], k.shape['row_height_cm'] # its gauge\n"
+      "  k.state.q                                            # control points, (n, 3)\n";
+  m.attr("__version__") = KNIT_VERSION;
+
+  py::register_exception<StepFailed>(m, "StepError", PyExc_RuntimeError);
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const InputError& e) {
+      PyErr_SetString(PyExc_ValueError, e.what());
+    }
+  });
+
+  m.def(
+      "set_threads",
+      [](int threads) {
+        if (threads < 0) throw std::invalid_argument("threads: must be >= 0 (0: all cores)");
+        g_threads.reset();
+        if (threads > 0)
+          g_threads = std::make_unique<tbb::global_control>(
+              tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
+      },
+      "threads"_a, "Use at most this many threads (0: all cores).");
+
+  // ------------------------------------------------------------- State
+  py::class_<State>(m, "State", "Control-point positions q and velocities v (cm, cm/s), time (s).")
+      .def(py::init([](const py::array_t<double, py::array::c_style | py::array::forcecast>& q,
+                       const py::object& v, double time) {
+             State s;
+             s.q = xyz_from(q, "q");
+             s.v = Eigen::VectorXd::Zero(s.q.size());
+             if (!v.is_none())
+               assign_xyz(s.v,
+                          v.cast<py::array_t<double, py::array::c_style | py::array::forcecast>>(),
+                          "v");
+             s.time = time;
+             return s;
+           }),
+           "q"_a, "v"_a = py::none(), "time"_a = 0.0)
+      .def_property(
+          "q", [](py::object self) { return xyz_view(self.cast<State&>().q, self); },
+          [](State& s, const py::array_t<double, py::array::c_style | py::array::forcecast>& a) {
+            assign_xyz(s.q, a, "q");
+          },
+          "Control points, (num_cp, 3) view (cm).")
+      .def_property(
+          "v", [](py::object self) { return xyz_view(self.cast<State&>().v, self); },
+          [](State& s, const py::array_t<double, py::array::c_style | py::array::forcecast>& a) {
+            assign_xyz(s.v, a, "v");
+          },
+          "Velocities, (num_cp, 3) view (cm/s).")
+      .def_readwrite("time", &State::time, "s")
+      .def_property_readonly("num_cp", [](const State& s) { return s.q.size() / 3; })
+      .def("copy", [](const State& s) { return State(s); })
+      .def("__repr__", [](const State& s) {
+        return "<knitsim.State " + std::to_string(s.q.size() / 3) +
+               " control points, t = " + std::to_string(s.time) + " s>";
+      });
+
+  // ------------------------------------------------------------- Model
+  py::class_<Model>(m, "Model", "The immutable model: yarns, rest lengths, constraints, params.")
+      .def_property_readonly("num_cp", &Model::num_cp)
+      .def_property_readonly("num_seg", &Model::num_seg)
+      .def_property_readonly("num_yarns", [](const Model& mo) { return mo.yarns.size(); })
+      .def_property_readonly(
+          "yarn_cp_counts",
+          [](const Model& mo) {
+            std::vector<int> n;
+            for (const YarnInfo& y : mo.yarns) n.push_back(y.num_cp());
+            return n;
+          },
+          "Control points per yarn.")
+      .def_property_readonly(
+          "radius", [](const Model& mo) { return mo.params.material.radius; },
+          "Yarn radius r (cm).")
+      .def_property_readonly(
+          "time_step", [](const Model& mo) { return mo.params.solver.time_step; }, "h (s).")
+      .def_property_readonly(
+          "stitch", [](const Model& mo) { return stitch_array(mo.stitch); },
+          "(num_seg, 2) int array: each segment's stitch (row, column); -1 where none.")
+      .def_property_readonly(
+          "rest_length",
+          [](const Model& mo) {
+            return py::array_t<double>(static_cast<py::ssize_t>(mo.rest_length.size()),
+                                       mo.rest_length.data());
+          },
+          "Rest length of each segment (cm).")
+      .def_property_readonly(
+          "mass",
+          [](const Model& mo) { return py::array_t<double>(mo.mass.size(), mo.mass.data()); },
+          "Lumped mass of each control point (g).")
+      .def_property_readonly(
+          "clamps",
+          [](const Model& mo) {
+            std::vector<std::string> n;
+            for (const Clamp& c : mo.clamps) n.push_back(c.name);
+            return n;
+          },
+          "Names of the clamps.")
+      .def_property_readonly(
+          "knit", [](const Model& mo) { return knit_info(mo.knit); },
+          "Where a generated knit came from (empty for other yarns).")
+      .def_property_readonly("total_length", &Model::total_length, "Total rest length (cm).")
+      .def("__repr__", [](const Model& mo) {
+        return "<knitsim.Model " + std::to_string(mo.yarns.size()) + " yarns, " +
+               std::to_string(mo.num_seg()) + " segments>";
+      });
+
+  m.def(
+      "measure_fabric",
+      [](const Model& mo, const State& s) { return to_python(to_json(measure_fabric(mo, s.q))); },
+      "model"_a, "state"_a,
+      "The fabric's shape (a knit's model): width, height, thickness, gauge (stitch width, row "
+      "height), edge curl … as a dict (cm).");
+
+  // ------------------------------------------------------------- Simulator
+  py::class_<Simulator>(m, "Simulator",
+                        "Steps a state: forces → explicit midpoint → projection → filters.")
+      .def(py::init([](const Model& mo) { return std::make_unique<Simulator>(mo); }), "model"_a,
+           "A simulator with the model's default terms (no velocity filters).")
+      .def_property_readonly("model", &Simulator::model,
+                             py::return_value_policy::reference_internal)
+      .def(
+          "step",
+          [](Simulator& sim, State& s, std::optional<double> h, int steps) {
+            if (steps < 1) throw std::invalid_argument("steps: must be >= 1");
+            StepResult r;
+            {
+              py::gil_scoped_release release;
+              for (int k = 0; k < steps && r.ok(); ++k) r = h ? sim.step(s, *h) : sim.step(s);
+            }
+            if (!r.ok()) throw StepFailed(r.message);
+          },
+          "state"_a, "h"_a = py::none(), "steps"_a = 1,
+          "Advances `state` by `steps` steps of h (default: the model's). Raises StepError "
+          "when a step fails (the state stays the last good one).")
+      .def(
+          "run",
+          [](Simulator& sim, State& s, double duration, int output_every, const std::string& out,
+             bool progress) {
+            RunOptions o;
+            o.duration = duration;
+            o.output_every = output_every;
+            o.out_dir = out;
+            o.progress = progress;
+            o.write_frames = !out.empty();
+            const RunReport r = run_interruptible([&] { return run_simulation(sim, s, o); });
+            return report_dict(r);
+          },
+          "state"_a, "duration"_a, "output_every"_a = 100, "out"_a = "", "progress"_a = false,
+          "Runs for `duration` s (writing the run into `out`, a new or empty folder, when "
+          "given); returns the report "
+          "(status, message, steps, summary).")
+      .def(
+          "forward", [](Simulator& sim, const State& s) { sim.forward(s); }, "state"_a,
+          "Evaluates the forces at `state` and records them in `data`.")
+      .def_property_readonly(
+          "data", [](const Simulator& sim) { return step_data_dict(sim.data()); },
+          "What the last forward and step recorded (energies, contact set, constraint forces, "
+          "…) as a dict with numpy arrays.")
+      .def("kinetic_energy", &Simulator::kinetic_energy, "state"_a, "erg")
+      .def("potential_energy", &Simulator::potential_energy, "state"_a, "erg")
+      .def(
+          "linear_momentum",
+          [](const Simulator& sim, const State& s) { return vec3(sim.linear_momentum(s)); },
+          "state"_a, "g cm/s")
+      .def("max_violation", &Simulator::max_violation, "state"_a,
+           "max |C| over the constraints (cm)");
+
+  // ------------------------------------------------------------- knits
+  py::class_<Knit>(m, "Knit", "A relaxed knit: its model, last state and the run's report.")
+      .def_property_readonly(
+          "model", [](Knit& k) -> const Model& { return k.result.model; },
+          py::return_value_policy::reference_internal)
+      .def_property_readonly(
+          "state", [](Knit& k) -> State& { return k.result.state; },
+          py::return_value_policy::reference_internal)
+      .def_property_readonly("status",
+                             [](const Knit& k) { return status_word(k.result.report.status); })
+      .def_property_readonly("message", [](const Knit& k) { return k.result.report.message; })
+      .def_property_readonly("steps", [](const Knit& k) { return k.result.report.steps; })
+      .def_property_readonly("summary",
+                             [](const Knit& k) { return to_python(k.result.report.summary); })
+      .def_property_readonly(
+          "shape",
+          [](const Knit& k) {
+            return to_python(to_json(measure_fabric(k.result.model, k.result.state.q)));
+          },
+          "The relaxed fabric's shape and gauge (see measure_fabric).")
+      .def(
+          "save",
+          [](const Knit& k, const std::string& path) {
+            write_state_file(path, make_state_file(k.result.model, k.result.state));
+          },
+          "path"_a, "Writes the knit as a .kstate (what `knitsim relax` writes).")
+      .def("__repr__", [](const Knit& k) {
+        return "<knitsim.Knit " + std::to_string(k.result.model.num_seg()) + " segments, " +
+               status_word(k.result.report.status) +
+               ", t = " + std::to_string(k.result.state.time) + " s>";
+      });
+
+  m.def(
+      "relax",
+      [](const std::string& pattern, std::optional<int> rows, std::optional<int> cols,
+         std::optional<bool> in_the_round, double max_time, double rest, double stitch_size,
+         double shrink, int segments_per_stitch, const py::object& params, const std::string& out,
+         bool overwrite, bool progress, const State* resume) {
+        RelaxKnitOptions o;
+        if (is_knitout_path(pattern)) {
+          // a knitting-machine program knits what it says: its size is the default
+          const KnitoutPiece piece = load_knitout(pattern);
+          o.knit.rows = piece.rows();
+          o.knit.cols = piece.cols();
+          o.knit.in_the_round = piece.in_the_round;
+        }
+        if (rows) o.knit.rows = *rows;
+        if (cols) o.knit.cols = *cols;
+        if (in_the_round) o.knit.in_the_round = *in_the_round;
+        o.knit.stitch_size_cm = stitch_size;
+        o.knit.segments_per_stitch = segments_per_stitch;
+        o.shrink = shrink;
+        o.params = params_over(o.params, params, "relax");
+        o.run.max_time = max_time;
+        o.run.ke_per_length = rest;
+        o.run.out_dir = out;
+        o.run.overwrite = overwrite;
+        o.run.progress = progress;
+        o.resume = resume;
+        auto k = std::make_unique<Knit>();
+        k->result = run_interruptible([&] { return relax_knit(pattern, o); });
+        return k;
+      },
+      "pattern"_a, "rows"_a = py::none(), "cols"_a = py::none(), "in_the_round"_a = py::none(),
+      "max_time"_a = 2.0, "rest"_a = 1e-5, "stitch_size"_a = 0.0, "shrink"_a = RELAX_SHRINK,
+      "segments_per_stitch"_a = 8, "params"_a = py::none(), "out"_a = "", "overwrite"_a = false,
+      "progress"_a = false, "resume"_a = nullptr,
+      "Generates `pattern` (stockinette, garter, rib2x2, seed, … a chart file or a knitout "
+      "program) at rows × cols (default 12 × 12, or the program's size) and relaxes it until it "
+      "rests (kinetic energy per length below `rest` erg/cm) or `max_time` s of "
+      "simulated time. `params`: a dict of scene parameters over the relaxation's. With "
+      "`out`, writes the run as `knitsim relax --out` does. Returns a Knit.");
+
+  // ------------------------------------------------------------- files
+  py::class_<StateFile>(m, "StateFile", "A .kstate file's contents.")
+      .def_property_readonly(
+          "state", [](StateFile& f) -> State& { return f.state; },
+          py::return_value_policy::reference_internal)
+      .def_readonly("yarn_cp_counts", &StateFile::yarn_cp_counts)
+      .def_readonly("yarn_radius", &StateFile::yarn_radius)
+      .def_property_readonly("stitch", [](const StateFile& f) { return stitch_array(f.stitch); })
+      .def_property_readonly("knit", [](const StateFile& f) { return knit_info(f.knit); })
+      .def_property_readonly("num_cp", &StateFile::num_cp)
+      .def_property_readonly("num_seg", &StateFile::num_seg);
+  m.def("read_state", &read_state_file, "path"_a,
+        "Reads a .kstate (positions, velocities, yarn layout, stitches, the knit's rest "
+        "lengths and glues).");
+  m.def(
+      "write_state",
+      [](const std::string& path, const Model& mo, const State& s) {
+        write_state_file(path, make_state_file(mo, s));
+      },
+      "path"_a, "model"_a, "state"_a, "Writes `state` of `model` as a .kstate, atomically.");
+
+  // ------------------------------------------------------------- scenes
+  py::class_<Scene>(m, "Scene", "A scene: model, initial state, duration and output interval.")
+      .def_property_readonly(
+          "model", [](Scene& s) -> const Model& { return s.model; },
+          py::return_value_policy::reference_internal)
+      .def_property_readonly(
+          "state", [](Scene& s) -> State& { return s.state; },
+          py::return_value_policy::reference_internal)
+      .def_readwrite("duration", &Scene::duration, "s")
+      .def_readwrite("output_every", &Scene::output_every)
+      .def(
+          "simulator", [](const Scene& s) { return make_scene_simulator(s); },
+          "The scene's simulator (its terms and velocity filters), ready to step `state`.")
+      .def(
+          "run",
+          [](Scene& s, const std::string& out, bool overwrite, bool progress) {
+            SimulateOptions o;
+            o.out_dir = out;
+            o.overwrite = overwrite;
+            o.progress = progress;
+            o.write_frames = !out.empty();
+            return report_dict(run_interruptible([&] { return simulate_scene(s, o); }));
+          },
+          "out"_a = "", "overwrite"_a = false, "progress"_a = false,
+          "Runs the scene to its duration (as `knitsim simulate`); `state` ends as the last "
+          "state. Returns the report.");
+  m.def(
+      "load_scene",
+      [](const std::string& path, const std::string& knit) {
+        return knit.empty() ? load_scene(path) : load_scene_with_knit(path, knit);
+      },
+      "path"_a, "knit"_a = "",
+      "Reads a scene file (docs/scene-format.md); `knit`: a .kstate for the scene's knit "
+      "(as `knitsim simulate --knit`).");
+
+  // ------------------------------------------------------------- stretch
+  m.def(
+      "stretch",
+      [](const std::string& kstate, const std::string& direction, double to, double speed,
+         int cycles, int clamp_stitches, double output_strain, const std::string& out,
+         bool overwrite, bool render, bool progress) {
+        StretchOptions o;
+        o.direction = parse_stretch_direction(direction);
+        o.to_strain = to;
+        o.speed = speed;
+        o.cycles = cycles;
+        o.clamp_stitches = clamp_stitches;
+        o.output_strain = output_strain;
+        o.out_dir = out;
+        o.overwrite = overwrite;
+        o.render = render;
+        o.progress = progress;
+        o.write_frames = !out.empty();
+        const StretchResult r = run_interruptible([&] { return stretch_knit(kstate, o); });
+        const auto n = static_cast<py::ssize_t>(r.curve.size());
+        auto column = [&](double StretchSample::*field) {
+          py::array_t<double> a(n);
+          for (py::ssize_t k = 0; k < n; ++k) a.mutable_at(k) = r.curve[k].*field;
+          return a;
+        };
+        py::dict curve("time"_a = column(&StretchSample::time),
+                       "strain"_a = column(&StretchSample::strain),
+                       "force_fixed"_a = column(&StretchSample::force_fixed),
+                       "force_moving"_a = column(&StretchSample::force_moving),
+                       "width"_a = column(&StretchSample::width),
+                       "potential_energy"_a = column(&StretchSample::potential_energy),
+                       "kinetic_energy"_a = column(&StretchSample::kinetic_energy),
+                       "min_contact_distance"_a = column(&StretchSample::min_contact_distance),
+                       "edge_curl"_a = column(&StretchSample::edge_curl));
+        py::dict result = report_dict(r.report);
+        result["curve"] = curve;
+        result["initial_separation"] = r.initial_separation;
+        result["speed"] = r.speed;
+        result["axis"] = vec3(r.axis);
+        return result;
+      },
+      "kstate"_a, "direction"_a = "course", "to"_a = 1.0, "speed"_a = 5.0, "cycles"_a = 0,
+      "clamp_stitches"_a = 2, "output_strain"_a = 0.01, "out"_a = "", "overwrite"_a = false,
+      "render"_a = false, "progress"_a = false,
+      "Stretch test of a relaxed knit (.kstate) along the course, wale or bias, as `knitsim "
+      "stretch --from`: returns the report with `curve` (strain, clamp forces in dyn, width "
+      "in cm, … as numpy arrays), the initial clamp separation (cm) and the speed as run.");
+}

@@ -1,0 +1,191 @@
+"""The Python module against physics and against the library's own recipes.
+
+Run through ctest (scripts/test.sh), or by hand:
+    PYTHONPATH=build/python KNIT_EXAMPLES=examples /usr/bin/python3 -m pytest python/tests
+"""
+import json
+import os
+import pathlib
+import signal
+import threading
+
+import numpy as np
+import pytest
+
+import knitsim
+
+EXAMPLES = pathlib.Path(os.environ.get("KNIT_EXAMPLES",
+                                       pathlib.Path(__file__).parents[2] / "examples"))
+G = 981.0  # cm/s², MODEL.md's gravity
+
+
+@pytest.fixture(scope="module")
+def small_knit():
+    # a 4×5 stockinette relaxed briefly: enough for layouts, files and a short pull
+    return knitsim.relax("stockinette", rows=4, cols=5, max_time=0.03)
+
+
+def write_scene(tmp_path, scene):
+    path = tmp_path / "scene.json"
+    path.write_text(json.dumps(scene))
+    return str(path)
+
+
+def test_version_is_the_programs():
+    assert knitsim.__version__.count(".") == 2
+
+
+def test_relax_gives_a_knit_with_its_layout_and_gauge(small_knit):
+    k = small_knit
+    m, s = k.model, k.state
+    assert k.status == "ok"
+    assert s.q.shape == (m.num_cp, 3) and s.v.shape == (m.num_cp, 3)
+    assert m.stitch.shape == (m.num_seg, 2)
+    # every stitch of the 4×5 chart is somewhere in the yarn
+    stitches = {tuple(rc) for rc in m.stitch if rc[0] >= 0}
+    assert stitches == {(r, c) for r in range(4) for c in range(5)}
+    assert m.knit["pattern"] == "stockinette" and m.knit["rows"] == 4
+    shape = k.shape
+    # the gauge is the fabric's extent per stitch, a few yarn diameters
+    assert 4 * m.radius < shape["stitch_width_cm"] < 20 * m.radius
+    assert 4 * m.radius < shape["row_height_cm"] < 20 * m.radius
+    assert shape == knitsim.measure_fabric(m, s)
+    # the summary is the one `knitsim relax` writes
+    assert k.summary["status"] == "ok" and k.steps == k.summary["steps"]
+
+
+def test_state_arrays_are_views_of_the_state(small_knit):
+    s = small_knit.state.copy()
+    q = s.q
+    q[0, 0] += 1.0
+    assert s.q[0, 0] == q[0, 0]  # the same memory
+    before = s.q.copy()
+    s.q = before + 2.0  # assignment copies in
+    assert np.array_equal(s.q, before + 2.0)
+    with pytest.raises(ValueError, match="points for a state of"):
+        s.q = np.zeros((3, 3))
+
+
+def test_kstate_files_round_trip_exactly(small_knit, tmp_path):
+    path = str(tmp_path / "knit.kstate")
+    small_knit.save(path)
+    f = knitsim.read_state(path)
+    assert np.array_equal(f.state.q, small_knit.state.q)
+    assert np.array_equal(f.state.v, small_knit.state.v)
+    assert f.state.time == small_knit.state.time
+    assert np.array_equal(f.stitch, small_knit.model.stitch)
+    assert f.yarn_cp_counts == small_knit.model.yarn_cp_counts
+    assert f.knit["cols"] == 5
+
+
+def test_a_free_yarn_falls_at_g_and_keeps_its_momentum_otherwise(tmp_path):
+    # no pins, no damping: the centre of mass accelerates at exactly g (MODEL.md's
+    # internal forces and the length projection exert no net force)
+    scene = write_scene(tmp_path, {
+        "time_step": 1e-4, "duration": 0.05,
+        "params": {"k_global": 0, "contact": False},
+        "yarns": [{"polyline": [[0, 0, 0], [2, 1, 0], [4, 0, 1], [6, 1, 1]], "segments": 12}],
+    })
+    sc = knitsim.load_scene(scene)
+    sim = sc.simulator()
+    s = sc.state
+    mass = sc.model.mass
+    sim.step(s, steps=500)
+    assert s.time == pytest.approx(0.05)
+    momentum = (mass[:, None] * s.v).sum(axis=0)
+    vcm = momentum / mass.sum()
+    assert vcm[2] == pytest.approx(-G * 0.05, rel=1e-9)
+    assert abs(vcm[0]) < 1e-9 and abs(vcm[1]) < 1e-9
+    assert np.allclose(sim.linear_momentum(s), momentum)
+
+
+def test_pins_carry_the_weight_of_a_hanging_yarn():
+    # the catenary example settles; its two pins then hold the yarn's whole weight
+    sc = knitsim.load_scene(str(EXAMPLES / "hanging.json"))
+    report = sc.run()
+    assert report["status"] == "ok"
+    sim = sc.simulator()
+    sim.step(sc.state)
+    data = sim.data
+    pins = [c for c in data["constraints"] if c["kind"] == "pin"]
+    assert len(pins) == 2
+    lift = sum(c["force"][2] for c in pins)
+    weight = sc.model.mass.sum() * G
+    assert lift == pytest.approx(weight, rel=0.01)
+    # and they pull the ends together equally (a symmetric catenary)
+    assert pins[0]["force"][0] == pytest.approx(-pins[1]["force"][0], rel=0.01)
+    assert data["energies"]["gravity"] < 0 and data["kinetic_energy"] < 1e-3 * abs(
+        data["energies"]["gravity"])
+
+
+def test_stepping_by_hand_matches_the_scene_run():
+    a = knitsim.load_scene(str(EXAMPLES / "pendulum.json"))
+    a.duration = 0.01
+    a.run()
+    b = knitsim.load_scene(str(EXAMPLES / "pendulum.json"))
+    sim = b.simulator()
+    sim.step(b.state, steps=100)
+    assert b.state.time == pytest.approx(a.state.time)
+    assert np.allclose(b.state.q, a.state.q, rtol=0, atol=1e-12)
+
+
+def test_contact_set_reads_as_arrays(small_knit):
+    sim = knitsim.Simulator(small_knit.model)
+    sim.forward(small_knit.state)
+    c = sim.data["contact"]
+    assert c["present"] and len(c["seg_i"]) > 0
+    assert (c["seg_i"] < c["seg_j"]).all()
+    assert ((c["d"] > 0) & (c["d"] < 1)).all()
+    assert np.allclose(np.linalg.norm(c["normal"], axis=1), 1.0)
+    assert c["min_distance_ratio"] <= c["d"].min() + 1e-12
+
+
+def test_stretch_returns_its_curve(small_knit, tmp_path):
+    path = str(tmp_path / "knit.kstate")
+    small_knit.save(path)
+    r = knitsim.stretch(path, direction="course", to=0.05, speed=5.0, output_strain=0.01)
+    assert r["status"] == "ok"
+    curve = r["curve"]
+    assert curve["strain"][0] == pytest.approx(0, abs=1e-9)
+    assert curve["strain"][-1] == pytest.approx(0.05, abs=1e-3)
+    assert r["initial_separation"] > 0
+    # the sample resists: both clamps pull it apart at the end
+    assert curve["force_moving"][-1] > 0 and curve["force_fixed"][-1] > 0
+
+
+def test_errors_are_the_librarys_messages(tmp_path):
+    with pytest.raises(ValueError, match="not a built-in pattern"):
+        knitsim.relax("no_such_pattern", rows=4, cols=4)
+    with pytest.raises(ValueError, match="rows"):
+        knitsim.relax("stockinette", rows=1, cols=4)
+    with pytest.raises(RuntimeError, match="missing.kstate"):
+        knitsim.read_state(str(tmp_path / "missing.kstate"))
+    bad = tmp_path / "bad.json"
+    bad.write_text('{"yarns": [}')
+    with pytest.raises(ValueError, match="bad.json"):
+        knitsim.load_scene(str(bad))
+    with pytest.raises(ValueError, match="direction"):
+        knitsim.stretch(str(tmp_path / "x.kstate"), direction="up")
+
+
+def test_a_failing_step_raises_and_keeps_the_state():
+    sc = knitsim.load_scene(str(EXAMPLES / "pendulum.json"))
+    sim = sc.simulator()
+    before = sc.state.q.copy()
+    with pytest.raises(knitsim.StepError):
+        sim.step(sc.state, h=1e9)
+    assert np.array_equal(sc.state.q, before)
+
+
+def test_ctrl_c_ends_a_relaxation_after_a_step(tmp_path):
+    # SIGINT while relaxing: the run stops cleanly (its state written) and Python gets
+    # KeyboardInterrupt
+    timer = threading.Timer(1.0, lambda: os.kill(os.getpid(), signal.SIGINT))
+    timer.start()
+    out = tmp_path / "run"
+    with pytest.raises(KeyboardInterrupt):
+        knitsim.relax("stockinette", rows=6, cols=6, max_time=100.0, out=str(out))
+    timer.join()
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "interrupted"
+    assert (out / "final.kstate").exists()
