@@ -8,7 +8,7 @@ cd "$(dirname "$0")/.."
 packages=(
   build-essential cmake ninja-build pkg-config
   libeigen3-dev libtbb-dev libembree-dev nlohmann-json3-dev libcli11-dev
-  libpng-dev zlib1g-dev libstb-dev libgtest-dev libgmock-dev libbenchmark-dev
+  zlib1g-dev libstb-dev libtinygltf-dev libgtest-dev libgmock-dev libbenchmark-dev
   libopenvdb-dev libboost-iostreams-dev
   ffmpeg gnuplot-nox clang-format
   python3-dev python3-numpy pybind11-dev

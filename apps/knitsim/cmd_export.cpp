@@ -1,4 +1,4 @@
-// knitsim export STATE|DIR --format usd|obj|bcc|ply --out FILE
+// knitsim export STATE|DIR --format usd|obj|bcc|ply|vtp|obj-mesh|ply-mesh|glb --out FILE
 #include <filesystem>
 #include <iostream>
 #include <stdexcept>
@@ -7,6 +7,7 @@
 #include "common.hpp"
 #include "knit/io/export.hpp"
 #include "knit/io/states.hpp"
+#include "knit/io/tube_mesh.hpp"
 
 namespace knitsim {
 namespace fs = std::filesystem;
@@ -17,19 +18,76 @@ struct ExportArgs {
   std::string input, format, out;
   std::string scene;
   int samples = knit::EXPORT_SAMPLES_PER_SEGMENT;
+  int sides = knit::TUBE_SIDES;
   bool ascii = false, no_objects = false;
+  bool y_up = false, metres = false;
   std::vector<std::shared_ptr<const knit::SceneObject>> objects;
 };
 
-void write_one(const knit::StateFile& s, const ExportArgs& a, const std::string& out) {
+// the file name extension each format writes
+std::string extension_of(const std::string& format) {
+  if (format == "usd") return ".usda";
+  if (format == "obj-mesh") return ".obj";
+  if (format == "ply-mesh") return ".ply";
+  return "." + format;
+}
+
+std::string lower(std::string s) {
+  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+// an output named for another format than the one written is refused: a reader would
+// misread it
+void check_extension(const ExportArgs& a) {
+  const std::string ext = lower(fs::path(a.out).extension().string());
+  const std::string want = extension_of(a.format);
+  if (a.format == "usd" && (ext == ".usdc" || ext == ".usdz"))
+    throw std::invalid_argument("--out " + a.out +
+                                ": knitsim writes USD as text; name it .usda (or .usd); " + ext +
+                                " is USD's binary " + (ext == ".usdc" ? "crate" : "zip package") +
+                                " format, which it cannot write");
+  if (ext == want || (a.format == "usd" && ext == ".usd")) return;
+  throw std::invalid_argument("--out " + a.out + ": the " + a.format + " format writes a " + want +
+                              " file; name the output so (got " +
+                              (ext.empty() ? "no extension" : ext) + ")");
+}
+
+// for tools that assume Y up or metres: (x, y, z) → (x, z, −y), and cm → m
+knit::StateFile in_axes(knit::StateFile s, const ExportArgs& a) {
+  const double scale = a.metres ? 0.01 : 1.0;
+  for (int k = 0; k < s.num_cp(); ++k)
+    for (Eigen::VectorXd* x : {&s.state.q, &s.state.v}) {
+      const Eigen::Vector3d p = x->segment<3>(3 * k);
+      x->segment<3>(3 * k) = scale * (a.y_up ? Eigen::Vector3d(p.x(), p.z(), -p.y()) : p);
+    }
+  for (double& r : s.yarn_radius) r *= scale;
+  return s;
+}
+
+void write_one(const knit::StateFile& state, const ExportArgs& a, const std::string& out) {
+  const knit::StateFile s = a.y_up || a.metres ? in_axes(state, a) : state;
   if (a.format == "obj") knit::export_obj(s, out, a.samples);
   if (a.format == "bcc") knit::export_bcc(s, out, a.samples);
   if (a.format == "ply") knit::export_ply(s, out, !a.ascii, a.samples);
+  if (a.format == "vtp") knit::export_vtp(s, out, a.samples);
   if (a.format == "usd") knit::export_usd({s}, {s.state.time}, out, a.objects);
+  if (a.format == "obj-mesh" || a.format == "ply-mesh" || a.format == "glb") {
+    const knit::TubeMesh m = knit::tube_mesh(s, a.samples, a.sides);
+    knit::write_file_atomic(out, a.format == "obj-mesh"   ? knit::obj_mesh_text(m)
+                                 : a.format == "ply-mesh" ? knit::ply_mesh_bytes(m)
+                                                          : knit::glb_bytes(m));
+  }
 }
 
 void run_export(ExportArgs a) {
+  if ((a.y_up || a.metres) && (a.format == "usd" || a.format == "glb"))
+    throw std::invalid_argument(
+        "--y-up and --metres are for obj, ply, bcc, vtp and the obj and "
+        "ply meshes: " +
+        a.format + " states its axes and units itself");
   if (a.format == "usd") a.objects = objects_for(a.input, a.scene, a.no_objects);
+  if (!fs::is_directory(a.input) || a.format == "usd") check_extension(a);
   if (!fs::is_directory(a.input)) {
     write_one(knit::load_state(a.input), a, a.out);
     std::cout << "wrote " << a.out << "\n";
@@ -63,7 +121,8 @@ void run_export(ExportArgs a) {
                              " writes one file per state; give a directory");
   fs::create_directories(a.out);
   for (const auto& f : files) {
-    const std::string out = (fs::path(a.out) / fs::path(f).stem()).string() + "." + a.format;
+    const std::string out =
+        (fs::path(a.out) / fs::path(f).stem()).string() + extension_of(a.format);
     write_one(knit::read_state_file(f), a, out);
   }
   std::cout << "wrote " << files.size() << " " << a.format << " files to " << a.out << "\n";
@@ -78,19 +137,30 @@ void register_export(CLI::App& app) {
   sub->add_option("input", args->input, "state file or directory of .kstate files")
       ->required()
       ->check(CLI::ExistingPath);
-  sub->add_option("--format,-f", args->format, "usd (exact curves), obj, bcc, ply (sampled)")
+  sub->add_option("--format,-f", args->format,
+                  "usd (exact curves, .usda), obj, bcc, ply, vtp (sampled centrelines; vtp with "
+                  "per-point radius, yarn, row, column, velocity for ParaView), obj-mesh, "
+                  "ply-mesh, glb (yarn tubes as triangles; glb in metres, Y up)")
       ->required()
-      ->check(CLI::IsMember({"usd", "obj", "bcc", "ply"}));
+      ->check(CLI::IsMember({"usd", "obj", "bcc", "ply", "vtp", "obj-mesh", "ply-mesh", "glb"}));
   sub->add_option("--out,-o", args->out, "output file (a directory for several obj/bcc/ply)")
       ->required();
   sub->add_option("--samples", args->samples, "polyline samples per spline segment (obj, bcc, ply)")
       ->check(CLI::Range(1, 1000));
   sub->add_flag("--ascii", args->ascii, "ascii PLY instead of binary");
+  sub->add_option("--sides", args->sides, "tube meshes: vertices around the yarn (default 12)")
+      ->check(CLI::Range(3, 64));
   sub->add_option("--scene", args->scene,
                   "usd: write this scene's objects beside the yarn (default: the scene a "
                   "simulation's summary.json beside the input names)")
       ->check(CLI::ExistingFile);
   sub->add_flag("--no-objects", args->no_objects, "usd: the yarn alone");
+  sub->add_flag("--y-up", args->y_up,
+                "obj, ply, bcc, vtp and meshes: turn Z up into Y up, (x, y, z) → (x, z, −y), "
+                "for tools that assume Y up (Blender's OBJ importer's default, Maya, Unity)");
+  sub->add_flag("--metres", args->metres,
+                "obj, ply, bcc, vtp and meshes: write metres instead of cm (USD says its unit, "
+                "glb is always metres)");
   sub->callback([args] { run_export(*args); });
 }
 

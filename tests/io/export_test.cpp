@@ -2,12 +2,14 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <regex>
 #include <sstream>
 
+#include "io/external_readers.hpp"
 #include "io/test_states.hpp"
 #include "knit/io/import.hpp"
 #include "knit/io/process.hpp"
@@ -18,12 +20,11 @@
 namespace knit {
 namespace {
 
-std::string slurp(const std::filesystem::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using test::BLENDER_MESH_REPORT;
+using test::MeshReport;
+using test::parse_mesh_report;
+using test::run_blender;
+using test::slurp;
 
 // every "(x, y, z)" triple in `text`
 std::vector<Eigen::Vector3d> parse_triples(const std::string& text) {
@@ -58,7 +59,9 @@ TEST(ExportUsd, SingleFrameWritesTheExactCurves) {
        {"#usda 1.0", "upAxis = \"Z\"", "metersPerUnit = 0.01", "def BasisCurves \"yarn_0\"",
         "def BasisCurves \"yarn_1\"", "uniform token type = \"cubic\"",
         "uniform token basis = \"bspline\"", "uniform token wrap = \"nonperiodic\"",
-        "int[] curveVertexCounts = [27]", "float[] widths = [0.25]"})
+        "int[] curveVertexCounts = [27]", "float[] widths = [0.25, 0.25,",
+        "interpolation = \"vertex\"", "color3f[] primvars:displayColor = [(",
+        "vector3f[] velocities = [("})
     EXPECT_NE(usda.find(needle), std::string::npos) << "missing: " << needle;
   EXPECT_EQ(usda.find("timeSamples"), std::string::npos);
   // the points are the control points themselves (float precision), not a resampling
@@ -68,6 +71,27 @@ TEST(ExportUsd, SingleFrameWritesTheExactCurves) {
   ASSERT_EQ(pts.size(), 27u);
   for (int k = 0; k < 27; ++k)
     EXPECT_LT((pts[k] - s.state.q.segment<3>(3 * k)).norm(), 1e-6) << "control point " << k;
+}
+
+TEST(ExportUsd, ColoursFollowTheRowsAndVelocitiesTheControlPoints) {
+  StateFile s = test::state_of({test::helix_control_points()}, 0.125, 0, true);
+  for (int k = 0; k < s.num_cp(); ++k) s.state.v.segment<3>(3 * k) = Eigen::Vector3d(k, -k, 0.5);
+  const std::string usda = usda_text({s}, {0.0});
+  auto array_of = [&](const std::string& name) {
+    const size_t at = usda.find(name + " = [");
+    EXPECT_NE(at, std::string::npos) << name;
+    const size_t begin = at + name.size() + 4;
+    return parse_triples(usda.substr(begin, usda.find(']', begin) - begin));
+  };
+  // rows are segment / 8: a colour per control point, the same along a row, changing
+  // between rows
+  const auto colours = array_of("primvars:displayColor");
+  ASSERT_EQ(colours.size(), 27u);
+  EXPECT_EQ(colours[0], colours[7]);
+  EXPECT_NE(colours[7], colours[8]);
+  const auto v = array_of("vector3f[] velocities");
+  ASSERT_EQ(v.size(), 27u);
+  for (int k = 0; k < 27; ++k) EXPECT_EQ(v[k], Eigen::Vector3d(k, -k, 0.5));
 }
 
 TEST(ExportUsd, SequenceBecomesTimeSamples) {
@@ -94,69 +118,8 @@ TEST(ExportUsd, SequenceBecomesTimeSamples) {
                std::invalid_argument);
 }
 
-// Blender reading our exports. scripts/test.sh installs Debian's blender (3.4: OBJ and PLY,
-// no USD), so these run wherever the suite does; without blender they fail, unless
-// KNIT_SKIP_BLENDER=1 asks to skip them.
-std::string blender_missing_message() {
-  return "blender is not installed (scripts/test.sh installs it; set KNIT_SKIP_BLENDER=1 to "
-         "skip the Blender tests)";
-}
-
-bool blender_skip_requested() {
-  const char* v = std::getenv("KNIT_SKIP_BLENDER");
-  return v != nullptr && std::strcmp(v, "") != 0 && std::strcmp(v, "0") != 0;
-}
-
-// Runs `script` (Python) in a headless Blender with `file` as its last argument; the script
-// writes what it found to the file named by its second-to-last argument, returned here.
-// Blender's exit status goes to `rc`, its messages to `messages`.
-std::string run_blender(const std::string& blender, const std::filesystem::path& dir,
-                        const std::string& script, const std::string& file, int& rc,
-                        std::string& messages) {
-  std::ofstream(dir / "check.py") << script;
-  const std::string report = (dir / "report.txt").string();
-  rc = run_process({blender, "-b", "--factory-startup", "--python", (dir / "check.py").string(),
-                    "--", report, file},
-                   messages);
-  return slurp(report);
-}
-
-// One line per mesh object, sorted by name: "name vertices edges min_x min_y min_z max_x
-// max_y max_z" (cm, as in the file: the importers are told not to turn the axes).
-const char* const BLENDER_MESH_REPORT =
-    "objs = sorted((o for o in bpy.data.objects if o.type == 'MESH'), key=lambda o: o.name)\n"
-    "with open(sys.argv[-2], 'w') as out:\n"
-    "    for o in objs:\n"
-    "        vs = [o.matrix_world @ v.co for v in o.data.vertices]\n"
-    "        lo = [min(v[i] for v in vs) for i in range(3)]\n"
-    "        hi = [max(v[i] for v in vs) for i in range(3)]\n"
-    "        out.write('%s %d %d %.6f %.6f %.6f %.6f %.6f %.6f\\n' % ((o.name, "
-    "len(o.data.vertices),\n"
-    "                  len(o.data.edges)) + tuple(lo) + tuple(hi)))\n"
-    "sys.exit(0 if objs else 3)\n";
-
-struct MeshReport {
-  std::string name;
-  long vertices = 0, edges = 0;
-  Eigen::Vector3d lo, hi;
-};
-
-std::vector<MeshReport> parse_mesh_report(const std::string& text) {
-  std::vector<MeshReport> out;
-  std::istringstream in(text);
-  MeshReport m;
-  while (in >> m.name >> m.vertices >> m.edges >> m.lo.x() >> m.lo.y() >> m.lo.z() >> m.hi.x() >>
-         m.hi.y() >> m.hi.z())
-    out.push_back(m);
-  return out;
-}
-
 TEST(ExportObj, BlenderImportsIt) {
-  const std::string blender = find_executable("blender");
-  if (blender.empty()) {
-    if (blender_skip_requested()) GTEST_SKIP() << "KNIT_SKIP_BLENDER is set";
-    FAIL() << blender_missing_message();
-  }
+  KNIT_REQUIRE_READER(blender, "blender", "blender");
   const StateFile s =
       test::state_of({test::helix_control_points(), test::helix_control_points(0.5)});
   const auto dir = test::temp_dir("obj-blender");
@@ -187,11 +150,7 @@ TEST(ExportObj, BlenderImportsIt) {
 }
 
 TEST(ExportPly, BlenderImportsIt) {
-  const std::string blender = find_executable("blender");
-  if (blender.empty()) {
-    if (blender_skip_requested()) GTEST_SKIP() << "KNIT_SKIP_BLENDER is set";
-    FAIL() << blender_missing_message();
-  }
+  KNIT_REQUIRE_READER(blender, "blender", "blender");
   const StateFile s =
       test::state_of({test::helix_control_points(), test::helix_control_points(0.5)});
   const auto dir = test::temp_dir("ply-blender");
@@ -225,11 +184,7 @@ TEST(ExportPly, BlenderImportsIt) {
 }
 
 TEST(ExportUsd, BlenderImportsIt) {
-  const std::string blender = find_executable("blender");
-  if (blender.empty()) {
-    if (blender_skip_requested()) GTEST_SKIP() << "KNIT_SKIP_BLENDER is set";
-    FAIL() << blender_missing_message();
-  }
+  KNIT_REQUIRE_READER(blender, "blender", "blender");
   const auto dir = test::temp_dir("usd-blender");
   const std::string usd = (dir / "helix.usda").string();
   export_usd({test::helix_state()}, {0.0}, usd);
@@ -257,11 +212,7 @@ TEST(ExportUsd, BlenderImportsIt) {
 // An object's surface as OBJ opens in Blender as one closed mesh: every vertex, every edge
 // shared by two triangles (E = 3T/2), where the sphere is.
 TEST(ExportObjectMesh, BlenderImportsAClosedSurface) {
-  const std::string blender = find_executable("blender");
-  if (blender.empty()) {
-    if (blender_skip_requested()) GTEST_SKIP() << "KNIT_SKIP_BLENDER is set";
-    FAIL() << blender_missing_message();
-  }
+  KNIT_REQUIRE_READER(blender, "blender", "blender");
   const ShapePtr ball = make_sphere(Eigen::Vector3d(1, 2, 3), 2);
   const TriangleMesh m = surface_mesh(
       *ball, Eigen::AlignedBox3d(Eigen::Vector3d::Constant(-5), Eigen::Vector3d::Constant(8)),
@@ -440,6 +391,61 @@ TEST(ExportCli, FormatsFilesAndDirectories) {
   EXPECT_EQ(run({"export", (dir / "states").string(), "--format", "obj", "--out", seq}, msg), 1);
   EXPECT_NE(msg.find("knitsim: error:"), std::string::npos) << msg;
   EXPECT_NE(msg.find("one file per state"), std::string::npos) << msg;
+  // the tube meshes and VTP, one file and a directory (named .obj / .ply per state)
+  for (const auto& [fmt, ext] : std::vector<std::pair<std::string, std::string>>{
+           {"vtp", ".vtp"}, {"obj-mesh", ".obj"}, {"ply-mesh", ".ply"}, {"glb", ".glb"}}) {
+    const std::string out = (dir / ("tube" + ext)).string();
+    EXPECT_EQ(run({"export", (dir / "s0.kstate").string(), "--format", fmt, "--out", out}, msg), 0)
+        << msg;
+    EXPECT_TRUE(std::filesystem::exists(out)) << fmt;
+    const auto each = dir / ("each-" + fmt);
+    EXPECT_EQ(
+        run({"export", (dir / "states").string(), "--format", fmt, "--out", each.string()}, msg), 0)
+        << msg;
+    EXPECT_TRUE(std::filesystem::exists(each / ("s1" + ext))) << fmt;
+  }
+  // Y up in metres: the OBJ's vertices are (x, z, −y) / 100 of the default's
+  const std::string zup = (dir / "zup.obj").string(), yup = (dir / "yup.obj").string();
+  ASSERT_EQ(run({"export", (dir / "s0.kstate").string(), "--format", "obj", "--out", zup}, msg), 0);
+  ASSERT_EQ(run({"export", (dir / "s0.kstate").string(), "--format", "obj", "--y-up", "--metres",
+                 "--out", yup},
+                msg),
+            0)
+      << msg;
+  auto vertices = [&](const std::string& path) {
+    std::vector<Eigen::Vector3d> v;
+    std::istringstream in(slurp(path));
+    for (std::string line; std::getline(in, line);)
+      if (line.rfind("v ", 0) == 0) {
+        std::istringstream l(line.substr(2));
+        Eigen::Vector3d p;
+        l >> p.x() >> p.y() >> p.z();
+        v.push_back(p);
+      }
+    return v;
+  };
+  const auto a = vertices(zup), b = vertices(yup);
+  ASSERT_EQ(a.size(), b.size());
+  ASSERT_FALSE(a.empty());
+  for (size_t k = 0; k < a.size(); k += 17)
+    EXPECT_LT((b[k] - Eigen::Vector3d(a[k].x(), a[k].z(), -a[k].y()) / 100).norm(), 1e-7) << k;
+  EXPECT_EQ(run({"export", (dir / "s0.kstate").string(), "--format", "glb", "--y-up", "--out",
+                 (dir / "y.glb").string()},
+                msg),
+            1);
+  // an output named for another format is refused, and nothing is written
+  for (const auto& [fmt, name, why] : std::vector<std::array<std::string, 3>>{
+           {"usd", "x.usdc", "USD's binary crate format"},
+           {"usd", "x.usdz", "zip package"},
+           {"glb", "x.gltf", "the glb format writes a .glb file"},
+           {"obj-mesh", "x.ply", "writes a .obj file"},
+           {"ply", "x", "got no extension"}}) {
+    const std::string out = (dir / name).string();
+    EXPECT_EQ(run({"export", (dir / "s0.kstate").string(), "--format", fmt, "--out", out}, msg), 1)
+        << name;
+    EXPECT_NE(msg.find(why), std::string::npos) << msg;
+    EXPECT_FALSE(std::filesystem::exists(out)) << name;
+  }
   std::filesystem::remove_all(dir);
 }
 

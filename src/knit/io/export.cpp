@@ -53,6 +53,14 @@ void append_extent(std::string& out, const Eigen::Matrix3Xd& cp, double radius) 
 
 using detail::put;
 
+// a colour per row (or yarn): six hues of wool, in turn
+Eigen::Vector3d palette_colour(int key) {
+  static const double colours[6][3] = {{0.80, 0.36, 0.25}, {0.88, 0.66, 0.30}, {0.45, 0.62, 0.38},
+                                       {0.30, 0.52, 0.72}, {0.55, 0.40, 0.68}, {0.78, 0.45, 0.58}};
+  const auto& c = colours[((key % 6) + 6) % 6];
+  return {c[0], c[1], c[2]};
+}
+
 }  // namespace
 
 namespace {
@@ -153,8 +161,18 @@ std::string usda_text(const std::vector<StateFile>& frames, const std::vector<do
   const bool animated = frames.size() > 1;
   double fps = 24;
   if (animated) fps = static_cast<double>(frames.size() - 1) / (times.back() - times.front());
-  std::vector<std::vector<Eigen::Matrix3Xd>> cps;
-  for (const auto& f : frames) cps.push_back(yarn_control_points(f));
+  std::vector<std::vector<Eigen::Matrix3Xd>> cps, vels;
+  for (const auto& f : frames) {
+    cps.push_back(yarn_control_points(f));
+    StateFile v = f;
+    v.state.q = f.state.v;
+    vels.push_back(yarn_control_points(v));
+  }
+  std::vector<int> seg_begin;
+  for (int n = 0, y = 0; y < static_cast<int>(frames[0].yarn_cp_counts.size()); ++y) {
+    seg_begin.push_back(n);
+    n += frames[0].yarn_cp_counts[y] - 3;
+  }
 
   std::string out;
   out += "#usda 1.0\n(\n    doc = \"knitsim " KNIT_VERSION
@@ -177,11 +195,33 @@ std::string usda_text(const std::vector<StateFile>& frames, const std::vector<do
     out += "        uniform token basis = \"bspline\"\n";
     out += "        uniform token wrap = \"nonperiodic\"\n";
     out += "        int[] curveVertexCounts = [" + std::to_string(first.yarn_cp_counts[y]) + "]\n";
+    const int ncp = first.yarn_cp_counts[y];
+    // widths per control point (USD's "vertex" interpolation for cubic curves): 2r
     out += "        float[] widths = [";
-    append_float(out, 2 * r);
-    out += "] (\n            interpolation = \"constant\"\n        )\n";
+    for (int k = 0; k < ncp; ++k) {
+      if (k) out += ", ";
+      append_float(out, 2 * r);
+    }
+    out += "] (\n            interpolation = \"vertex\"\n        )\n";
+    // colours: by row where the yarn has stitches (each control point takes its segment's
+    // row), else one colour per yarn
+    out += "        color3f[] primvars:displayColor = [";
+    const int seg0 = seg_begin[y], nseg = ncp - 3;
+    const bool rows = static_cast<int>(first.stitch.size()) >= seg0 + nseg;
+    for (int k = 0; k < (rows ? ncp : 1); ++k) {
+      if (k) out += ", ";
+      const int key = rows ? first.stitch[seg0 + std::min(k, nseg - 1)].row : static_cast<int>(y);
+      append_point(out, palette_colour(key));
+    }
+    out += "] (\n            interpolation = \"";
+    out += rows ? "vertex" : "constant";
+    out += "\"\n        )\n";
     out += "        point3f[] points = ";
     append_points(out, cps[0][y]);
+    // the control points' velocities (cm/s: USD's velocities are units per second,
+    // whatever the time codes), for motion blur
+    out += "\n        vector3f[] velocities = ";
+    append_points(out, vels[0][y]);
     out += "\n        float3[] extent = ";
     append_extent(out, cps[0][y], r);
     out += "\n";
@@ -190,6 +230,12 @@ std::string usda_text(const std::vector<StateFile>& frames, const std::vector<do
       for (size_t f = 0; f < frames.size(); ++f) {
         out += "            " + std::to_string(f) + ": ";
         append_points(out, cps[f][y]);
+        out += ",\n";
+      }
+      out += "        }\n        vector3f[] velocities.timeSamples = {\n";
+      for (size_t f = 0; f < frames.size(); ++f) {
+        out += "            " + std::to_string(f) + ": ";
+        append_points(out, vels[f][y]);
         out += ",\n";
       }
       out += "        }\n        float3[] extent.timeSamples = {\n";
@@ -298,6 +344,76 @@ std::string ply_bytes(const StateFile& state, bool binary, int per_segment) {
 
 void export_ply(const StateFile& state, const std::string& path, bool binary, int per_segment) {
   write_file_atomic(path, ply_bytes(state, binary, per_segment));
+}
+
+std::string vtp_text(const StateFile& state, int per_segment) {
+  const auto yarns = sample_yarns(state, per_segment);
+  // velocities: the same samples of the velocity spline (sampling is linear)
+  StateFile velocity = state;
+  velocity.state.q = state.state.v;
+  const auto speeds = sample_yarns(velocity, per_segment);
+  const std::vector<int> cp_begin = state.yarn_cp_begin();
+  long long points = 0;
+  for (const auto& p : yarns) points += p.cols();
+  std::string pos, radius, yarn, row, col, vel, conn, offsets;
+  long long next = 0;
+  int seg_begin = 0;
+  for (size_t y = 0; y < yarns.size(); ++y) {
+    const Eigen::Matrix3Xd& p = yarns[y];
+    const int nseg = state.yarn_cp_counts[y] - 3;
+    for (Eigen::Index k = 0; k < p.cols(); ++k) {
+      for (int c = 0; c < 3; ++c) {
+        append_float(pos, p(c, k));
+        pos += ' ';
+        append_float(vel, speeds[y](c, k));
+        vel += ' ';
+      }
+      append_float(radius, state.yarn_radius[y]);
+      radius += ' ';
+      yarn += std::to_string(y) + ' ';
+      // the segment the sample lies on (the last sample ends the last segment)
+      const int seg = seg_begin + std::min(static_cast<int>(k / per_segment), nseg - 1);
+      const bool known = static_cast<size_t>(seg) < state.stitch.size();
+      row += std::to_string(known ? state.stitch[seg].row : -1) + ' ';
+      col += std::to_string(known ? state.stitch[seg].col : -1) + ' ';
+      conn += std::to_string(next + k) + ' ';
+    }
+    next += p.cols();
+    offsets += std::to_string(next) + ' ';
+    seg_begin += nseg;
+  }
+  std::string out = "<?xml version=\"1.0\"?>\n";
+  out += "<!-- knitsim " KNIT_VERSION ": yarn centrelines, units cm -->\n";
+  out += "<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\">\n";
+  out += "<PolyData>\n<FieldData>\n";
+  out += "<DataArray type=\"Float64\" Name=\"TimeValue\" NumberOfTuples=\"1\" format=\"ascii\">";
+  append_float(out, state.state.time);
+  out += "</DataArray>\n</FieldData>\n";
+  out += "<Piece NumberOfPoints=\"" + std::to_string(points) +
+         "\" NumberOfVerts=\"0\" NumberOfLines=\"" + std::to_string(yarns.size()) +
+         "\" NumberOfStrips=\"0\" NumberOfPolys=\"0\">\n";
+  out += "<Points>\n<DataArray type=\"Float32\" NumberOfComponents=\"3\" format=\"ascii\">" + pos +
+         "</DataArray>\n</Points>\n";
+  out += "<PointData Scalars=\"radius\" Vectors=\"velocity\">\n";
+  out +=
+      "<DataArray type=\"Float32\" Name=\"radius\" format=\"ascii\">" + radius + "</DataArray>\n";
+  out += "<DataArray type=\"Int32\" Name=\"yarn\" format=\"ascii\">" + yarn + "</DataArray>\n";
+  out += "<DataArray type=\"Int32\" Name=\"row\" format=\"ascii\">" + row + "</DataArray>\n";
+  out += "<DataArray type=\"Int32\" Name=\"column\" format=\"ascii\">" + col + "</DataArray>\n";
+  out +=
+      "<DataArray type=\"Float32\" Name=\"velocity\" NumberOfComponents=\"3\" format=\"ascii\">" +
+      vel + "</DataArray>\n";
+  out += "</PointData>\n<Lines>\n";
+  out +=
+      "<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">" + conn + "</DataArray>\n";
+  out +=
+      "<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">" + offsets + "</DataArray>\n";
+  out += "</Lines>\n</Piece>\n</PolyData>\n</VTKFile>\n";
+  return out;
+}
+
+void export_vtp(const StateFile& state, const std::string& path, int per_segment) {
+  write_file_atomic(path, vtp_text(state, per_segment));
 }
 
 }  // namespace knit

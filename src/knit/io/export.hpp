@@ -3,14 +3,19 @@
 // writes it with write_file_atomic, so an output is never half-written.
 //
 //   USD (.usda text)  exact curves: one BasisCurves prim per yarn (cubic, bspline,
-//                     nonperiodic), control points as `points`, widths = 2r; a sequence of
-//                     states becomes one file with time samples. Z up, 1 unit = 1 cm.
+//                     nonperiodic), control points as `points`, per-point widths = 2r,
+//                     displayColor by stitch row (by yarn without stitches), velocities
+//                     (cm/s) for motion blur; a sequence of states becomes one file with
+//                     time samples. Z up, 1 unit = 1 cm.
 //                     A scene's solid objects follow as one Mesh prim each (their surface,
 //                     triangulated in the object's frame; a plane as a slab around the
 //                     yarn), placed by translate and orient ops, time-sampled when they move.
 //   OBJ               polylines (`v`, and `l` for each span), splines sampled densely.
 //   BCC               Cem Yuksel's binary curve collection, PL (polyline) curves.
-//   PLY               points and edges (binary little-endian or ascii), e.g. for ParaView.
+//   PLY               points and edges (binary little-endian or ascii).
+//   VTP               VTK XML PolyData for ParaView: one polyline per yarn and per-point
+//                     arrays radius, yarn, row, column (−1 off the stitches), velocity.
+//   Tube meshes (OBJ, PLY, glTF) for viewers without curves: tube_mesh.hpp.
 #include <memory>
 #include <string>
 #include <vector>
@@ -47,6 +52,14 @@ void export_bcc(const StateFile& state, const std::string& path,
 std::string ply_bytes(const StateFile& state, bool binary,
                       int per_segment = EXPORT_SAMPLES_PER_SEGMENT);
 void export_ply(const StateFile& state, const std::string& path, bool binary = true,
+                int per_segment = EXPORT_SAMPLES_PER_SEGMENT);
+
+/// VTK XML PolyData (ascii): the sampled centrelines as one polyline cell per yarn, with
+/// point data radius (cm), yarn, row and column (of the segment each sample lies on; −1
+/// without stitch coordinates) and velocity (cm/s, the spline of the control-point
+/// velocities), and the state's time as field data TimeValue.
+std::string vtp_text(const StateFile& state, int per_segment = EXPORT_SAMPLES_PER_SEGMENT);
+void export_vtp(const StateFile& state, const std::string& path,
                 int per_segment = EXPORT_SAMPLES_PER_SEGMENT);
 
 }  // namespace knit
