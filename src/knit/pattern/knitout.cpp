@@ -158,7 +158,8 @@ KnitoutPiece parse_knitout(std::string_view text, const std::string& source_name
   if (!piece.in_the_round) {
     for (const auto& [index, beds] : beds_of) columns.push_back({beds[0], index});
   } else {
-    for (const auto& [index, beds] : beds_of) {
+    for (const auto& [needle_index, beds] : beds_of) {
+      const int index = needle_index;  // clang 14 cannot capture a structured binding
       if (beds.size() != 2) {
         const Stitch& s = *std::find_if(stitches.begin(), stitches.end(),
                                         [&](const Stitch& t) { return t.needle.index == index; });
