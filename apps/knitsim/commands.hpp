@@ -12,5 +12,6 @@ void register_plot(CLI::App& app);
 void register_stretch(CLI::App& app);
 void register_version(CLI::App& app);
 void register_mesh(CLI::App& app);
+void register_view(CLI::App& app);
 
 }  // namespace knitsim

@@ -20,6 +20,7 @@ int main(int argc, char** argv) {
   knitsim::register_plot(app);
   knitsim::register_stretch(app);
   knitsim::register_mesh(app);
+  knitsim::register_view(app);
   knitsim::register_version(app);
   // the first SIGINT/SIGTERM ends a run cleanly after its current step (state and summary
   // written); a second one ends the process at once

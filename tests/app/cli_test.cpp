@@ -400,3 +400,24 @@ TEST(Cli, RelaxesAKnitoutProgramAtItsSizeAndRefusesWhatItCannotKnit) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST(Cli, ViewWritesAPageForARunAndRefusesAnotherName) {
+  const std::string out = temp_dir("cli_view_run");
+  ASSERT_EQ(run(std::string("simulate ") + KNIT_EXAMPLES +
+                "/pendulum.json --duration 0.05 --quiet --out " + out)
+                .code,
+            0);
+  const Result r = run("view " + out + " --every 2 --out " + out + "/run.html");
+  ASSERT_EQ(r.code, 0) << r.output;
+  // frames 0, 2, 4 and the last of the 6 written
+  EXPECT_NE(r.output.find("(4 frames"), std::string::npos) << r.output;
+  EXPECT_TRUE(fs::exists(out + "/run.html"));
+  const Result bad = run("view " + out + " --out " + out + "/run.png");
+  EXPECT_EQ(bad.code, 1);
+  EXPECT_NE(bad.output.find("name it .html"), std::string::npos) << bad.output;
+  EXPECT_FALSE(fs::exists(out + "/run.png"));
+}
+
+}  // namespace

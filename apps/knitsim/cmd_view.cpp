@@ -1,0 +1,68 @@
+// knitsim view STATE|DIR --out page.html: a run in the browser (src/knit/io/viewer.hpp)
+#include <filesystem>
+#include <iostream>
+#include <stdexcept>
+
+#include "commands.hpp"
+#include "knit/io/state_file.hpp"
+#include "knit/io/states.hpp"
+#include "knit/io/viewer.hpp"
+
+namespace knitsim {
+namespace fs = std::filesystem;
+
+namespace {
+
+struct ViewArgs {
+  std::string input, out, title;
+  int every = 1;
+  knit::ViewerOptions viewer;
+};
+
+void run_view(ViewArgs a) {
+  const std::string ext = fs::path(a.out).extension().string();
+  if (ext != ".html" && ext != ".htm")
+    throw std::invalid_argument("--out " + a.out + ": the viewer is a web page; name it .html");
+  std::vector<knit::StateFile> frames;
+  std::vector<double> times;
+  if (fs::is_directory(a.input)) {
+    const auto files = knit::list_state_files(a.input);
+    for (size_t k = 0; k < files.size(); ++k)
+      if (k % static_cast<size_t>(a.every) == 0 || k + 1 == files.size()) {
+        frames.push_back(knit::read_state_file(files[k]));
+        times.push_back(frames.back().state.time);
+      }
+  } else {
+    frames.push_back(knit::load_state(a.input));
+    times.push_back(frames.back().state.time);
+  }
+  a.viewer.title = a.title.empty() ? fs::path(a.input).filename().string() : a.title;
+  if (a.viewer.title.empty()) a.viewer.title = "knitsim";
+  knit::write_file_atomic(a.out, knit::viewer_html(frames, times, a.viewer));
+  std::cout << "wrote " << a.out << " (" << frames.size()
+            << (frames.size() == 1 ? " frame" : " frames") << "; open it in a web browser)\n";
+}
+
+}  // namespace
+
+void register_view(CLI::App& app) {
+  auto args = std::make_shared<ViewArgs>();
+  CLI::App* sub = app.add_subcommand(
+      "view", "write a web page that plays a run's frames as yarn tubes (orbit, time slider)");
+  sub->add_option("input", args->input, "a run's directory (its frames) or one state file")
+      ->required()
+      ->check(CLI::ExistingPath);
+  sub->add_option("--out,-o", args->out, "the page (.html, self-contained: opens offline)")
+      ->required();
+  sub->add_option("--every", args->every, "show every Nth frame (and the last)")
+      ->check(CLI::Range(1, 1000000));
+  sub->add_option("--title", args->title, "shown on the page (default: the input's name)");
+  sub->add_option("--samples", args->viewer.samples_per_segment,
+                  "points along each spline segment (default 4)")
+      ->check(CLI::Range(1, 64));
+  sub->add_option("--sides", args->viewer.sides, "vertices around the tube (default 8)")
+      ->check(CLI::Range(3, 64));
+  sub->callback([args] { run_view(*args); });
+}
+
+}  // namespace knitsim
