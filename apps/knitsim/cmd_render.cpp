@@ -27,7 +27,8 @@ struct RenderArgs {
   std::vector<std::string> compare;
   bool color_rows = false, overwrite = false;
   int spp = 4, shadow_rays = 4, ao_rays = 4;
-  double fps = 30;
+  double fps = 0;  // real time
+  bool no_scale_bar = false;
 };
 
 knit::RenderOptions options_from(const RenderArgs& a) {
@@ -45,6 +46,7 @@ knit::RenderOptions options_from(const RenderArgs& a) {
   o.spp = a.spp;
   o.shadow_rays = a.shadow_rays;
   o.ao_rays = a.ao_rays;
+  o.scale_bar = !a.no_scale_bar;
   return o;
 }
 
@@ -110,11 +112,14 @@ void render_sequence(const RenderArgs& a, const knit::RenderOptions& o) {
   note_rows(knit::read_state_file(files.front()), a, files.front());
   const knit::SequenceResult r = knit::render_sequence(files, o, a.out, a.fps);
   std::cout << "wrote " << r.frames << " frames to " << a.out << " (" << r.seconds_per_frame
-            << " s per frame)\n";
+            << " s per frame";
+  if (r.stride > 1) std::cout << "; one state in " << r.stride;
+  std::cout << ")\n";
   if (r.movie.empty())
     std::cout << "ffmpeg is not on PATH: no movie made\n";
   else
-    std::cout << "wrote " << r.movie << "\n";
+    std::cout << "wrote " << r.movie << " (" << r.fps << " frames per second"
+              << (a.fps > 0 ? ")\n" : ", real time)\n");
 }
 
 void render_any(const RenderArgs& a, const knit::RenderOptions& o);
@@ -199,7 +204,10 @@ void register_render(CLI::App& app) {
                   "summary.json beside the input names)")
       ->check(CLI::ExistingFile);
   sub->add_flag("--no-objects", a->no_objects, "draw the yarn alone");
-  sub->add_option("--fps", a->fps, "frame rate of the movie made from a sequence")
+  sub->add_flag("--no-scale-bar", a->no_scale_bar, "no scale bar (cm) in the corner");
+  sub->add_option("--fps", a->fps,
+                  "frame rate of the movie made from a sequence (default: the simulation's "
+                  "real time, at most 60 frames per second)")
       ->check(CLI::Range(1.0, 240.0))
       ->capture_default_str();
   sub->callback([a] { run_render(*a); });

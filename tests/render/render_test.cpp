@@ -8,6 +8,7 @@
 #include "io/test_states.hpp"
 #include "knit/io/process.hpp"
 #include "knit/io/states.hpp"
+#include "knit/render/sequence.hpp"
 #include "knit/spline/fit.hpp"
 
 namespace knit {
@@ -49,6 +50,27 @@ TEST(RenderCamera, FramesEveryCornerInside) {
   EXPECT_NEAR(front.forward.z(), -1, 1e-12);
   EXPECT_NEAR(front.up.y(), 1, 1e-12);
   EXPECT_THROW(parse_view("top"), std::invalid_argument);
+}
+
+TEST(RenderCamera, TheScaleBarSpansItsLengthAtTheFramedDepth) {
+  const Eigen::AlignedBox3d box(Eigen::Vector3d(-3, -2, 0), Eigen::Vector3d(4, 1, 0.5));
+  for (View v : {View::FRONT, View::ISO, View::SCENE}) {
+    const Camera cam = frame_camera(box, v, 640, 480);
+    const auto [length, pixels] = scale_bar_length(cam, box.center());
+    // a round length: 1, 2 or 5 × 10^k cm, at most a quarter of the image, more than a tenth
+    const double decade = std::pow(10.0, std::floor(std::log10(length)));
+    const double m = length / decade;
+    EXPECT_TRUE(std::abs(m - 1) < 1e-9 || std::abs(m - 2) < 1e-9 || std::abs(m - 5) < 1e-9) << m;
+    EXPECT_LE(pixels, 160);
+    EXPECT_GT(pixels, 64);
+    // project the box centre and a point `length` cm along the image's right direction
+    auto column = [&](const Eigen::Vector3d& p) {
+      const Eigen::Vector3d d = p - cam.eye;
+      return 320 + d.dot(cam.right) / d.dot(cam.forward) / cam.tan_half_x * 320;
+    };
+    const Eigen::Vector3d c = box.center();
+    EXPECT_NEAR(column(c + length * cam.right) - column(c), pixels, 1.0);
+  }
 }
 
 TEST(RenderHelix, CoversTheProjectedTube) {
@@ -123,6 +145,28 @@ TEST(RenderHelix, AllViewsAndRowColours) {
   EXPECT_THROW(render_state(s, bad), std::invalid_argument);
 }
 
+TEST(RenderImage, ScaleBarAndCaptionAreDrawnInTheCorners) {
+  const StateFile s = test::helix_state();
+  RenderOptions o = tiny();
+  o.width = 480;
+  o.height = 360;
+  o.spp = 1;
+  const Image plain = render_state(s, o);
+  o.scale_bar = true;
+  o.caption = "t = 0.250 s";
+  const Image marked = render_state(s, o);
+  // dark ink where the bar and the caption go, nothing else changed
+  auto changed = [&](int x0, int x1, int y0, int y1) {
+    int n = 0;
+    for (int y = y0; y < y1; ++y)
+      for (int x = x0; x < x1; ++x) n += (plain.pixel(x, y) - marked.pixel(x, y)).norm() > 0.2f;
+    return n;
+  };
+  EXPECT_GT(changed(240, 480, 300, 360), 50);  // the bar and its length, bottom right
+  EXPECT_GT(changed(0, 240, 320, 360), 30);    // the caption, bottom left
+  EXPECT_EQ(changed(0, 480, 0, 280), 0);
+}
+
 TEST(RenderImage, PngLabelsAndComposition) {
   Image a(40, 30, Eigen::Vector3f(1, 0, 0)), b(50, 30, Eigen::Vector3f(0, 0, 1));
   const Image both = compose_side_by_side({a, b}, {"stockinette", "rib"});
@@ -186,6 +230,23 @@ TEST(RenderCli, SequencesAndComparisons) {
             0)
       << msg;
   EXPECT_TRUE(std::filesystem::exists(dir / "cmp.png"));
+  // a movie at the simulation's real time: 11 states over 0.1 s are 100 per second, so one
+  // in two is shown at 50 frames per second
+  std::filesystem::create_directories(dir / "fast");
+  for (int f = 0; f <= 10; ++f)
+    write_state_file((dir / "fast" / ("s" + std::to_string(10 + f) + ".kstate")).string(),
+                     test::helix_state(0.01 * f));
+  RenderOptions o = tiny();
+  std::filesystem::create_directories(dir / "fast_frames");
+  std::vector<std::string> files;
+  for (int f = 0; f <= 10; ++f)
+    files.push_back((dir / "fast" / ("s" + std::to_string(10 + f) + ".kstate")).string());
+  const SequenceResult r = render_sequence(files, o, (dir / "fast_frames").string());
+  EXPECT_EQ(r.stride, 2);
+  EXPECT_EQ(r.frames, 6);
+  EXPECT_NEAR(r.fps, 50, 1e-9);
+  EXPECT_TRUE(std::filesystem::exists(dir / "fast_frames" / "frame_0005.png"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "fast_frames" / "frame_0006.png"));
   EXPECT_EQ(run({"render", (dir / "states" / "s0.kstate").string(), "--out",
                  (dir / "x.png").string(), "--size", "12"}),
             1);

@@ -188,6 +188,7 @@ nlohmann::json render_stretch(const std::string& out_dir, const std::vector<Stre
   ro.height = o.render_height;
   ro.view = View::FRONT;
   ro.color_rows = true;
+  ro.scale_bar = true;
   // one scale for every picture: the box of every frame
   Eigen::AlignedBox3d box;
   for (const std::string& f : frames) box.extend(state_bounds(read_state_file(f)));
@@ -216,7 +217,8 @@ nlohmann::json render_stretch(const std::string& out_dir, const std::vector<Stre
   fs::create_directories(dir / "movie");
   // movie frames at a lighter sampling than the stills
   ro.spp = ro.shadow_rays = ro.ao_rays = 2;
-  const SequenceResult movie = render_sequence(frames, ro, (dir / "movie").string(), 30);
+  // at the pull's real time, each frame with its time
+  const SequenceResult movie = render_sequence(frames, ro, (dir / "movie").string());
   return {{"images", shown},
           {"side_by_side", "stretch_renders.png"},
           {"movie",

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <memory>
 #include <stdexcept>
@@ -174,6 +175,60 @@ Eigen::AlignedBox3d scene_bounds(const StateFile& state,
   }
   return box;
 }
+
+std::pair<double, int> scale_bar_length(const Camera& camera, const Eigen::Vector3d& centre) {
+  // a pinhole camera: at depth d, one pixel spans 2 d tan(½ fov) / width
+  const double depth = std::max((centre - camera.eye).dot(camera.forward), 1e-9);
+  const double px_per_cm = camera.width / (2 * depth * camera.tan_half_x);
+  double length = 0;
+  for (double decade = 1e-3; decade <= 1e4; decade *= 10)
+    for (double m : {1.0, 2.0, 5.0})
+      if (m * decade * px_per_cm <= 0.25 * camera.width) length = m * decade;
+  return {length, static_cast<int>(std::lround(length * px_per_cm))};
+}
+
+namespace {
+
+std::string format_length(double cm) {
+  char buf[32];
+  if (cm >= 1)
+    std::snprintf(buf, sizeof buf, "%g cm", cm);
+  else
+    std::snprintf(buf, sizeof buf, "%g mm", cm * 10);
+  return buf;
+}
+
+// the scale bar and caption of RenderOptions, in dark grey, sized to the image
+void annotate(Image& image, const RenderOptions& opt, const Camera& cam,
+              const Eigen::Vector3d& centre) {
+  const int scale = std::max(1, std::min(image.width, image.height) / 240);
+  const int margin = 6 * scale;
+  const Eigen::Vector3f ink(0.15f, 0.15f, 0.17f);
+  if (opt.scale_bar) {
+    const auto [length, pixels] = scale_bar_length(cam, centre);
+    if (length > 0 && pixels >= 4) {
+      const int x1 = image.width - margin, x0 = x1 - pixels;
+      const int y1 = image.height - margin, y0 = y1 - 2 * scale;
+      for (int y = y0; y < y1; ++y)
+        for (int x = std::max(x0, 0); x < x1; ++x) image.set_pixel(x, y, ink);
+      // end ticks
+      for (int y = y0 - 3 * scale; y < y1; ++y)
+        for (int t = 0; t < scale; ++t) {
+          if (x0 + t >= 0) image.set_pixel(x0 + t, y, ink);
+          image.set_pixel(x1 - 1 - t, y, ink);
+        }
+      const std::string label = format_length(length);
+      const Eigen::Vector2i size = text_size(label, scale);
+      draw_text(image, x1 - size.x(), y0 - 5 * scale - size.y(), label, scale, ink);
+    }
+  }
+  if (!opt.caption.empty()) {
+    const Eigen::Vector2i size = text_size(opt.caption, scale);
+    draw_text(image, margin, image.height - margin - size.y(), opt.caption, scale, ink);
+  }
+}
+
+}  // namespace
 
 Image render_state(const StateFile& state, const RenderOptions& opt) {
   check_state_file(state, "render");
@@ -542,6 +597,7 @@ Image render_state(const StateFile& state, const RenderOptions& opt) {
                           }
                       }
                     });
+  annotate(image, opt, cam, frame.center());
   return image;
 }
 

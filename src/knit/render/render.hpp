@@ -72,7 +72,17 @@ struct RenderOptions {
   /// within the framed box grown by half its largest side: a plane is drawn as a slab that
   /// wide).
   std::vector<std::shared_ptr<const SceneObject>> objects;
+  /// A scale bar in the bottom right corner: a round length (1, 2 or 5 × 10^k cm) at most
+  /// a quarter of the image wide, measured at the depth of the framed box's centre, and
+  /// its length written above it.
+  bool scale_bar = false;
+  /// Text in the bottom left corner (e.g. the state's time); empty: none.
+  std::string caption;
 };
+
+/// The scale bar render_state draws: its length (cm) and width (pixels) for `camera`
+/// looking at a box centred at `centre`.
+std::pair<double, int> scale_bar_length(const Camera& camera, const Eigen::Vector3d& centre);
 
 /// The box a camera should frame for `state` among `objects`: the yarn's bounds and the
 /// bounds of every bounded object at the state's time.
