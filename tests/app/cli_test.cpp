@@ -199,7 +199,9 @@ TEST(Cli, RenderingARunDirectoryRendersItsFrames) {
                 .code,
             0);
   const std::string png = temp_dir("cli_run_frames_png");
-  const Result r = run("render " + out + " --out " + png + " --size 64x48 --spp 1");
+  // at a given frame rate every state is a frame (at real time, 100 states per second
+  // would be thinned to 50)
+  const Result r = run("render " + out + " --out " + png + " --size 64x48 --spp 1 --fps 30");
   ASSERT_EQ(r.code, 0) << r.output;
   EXPECT_TRUE(fs::exists(png + "/frame_0002.png")) << r.output;  // initial + 2 outputs
 }
