@@ -99,7 +99,7 @@ struct TempDir {
 
 const char* PREAMBLE =
     "set terminal pngcairo size 900,540 enhanced font 'sans,11' linewidth 1.5\n"
-    "set grid lc rgb '#dddddd'\nset key top right box opaque\nset border lc rgb '#555555'\n"
+    "set grid lc rgb '#dddddd'\nset key below\nset border lc rgb '#555555'\n"
     "set style line 1 lc rgb '#2f7074' lw 2\nset style line 2 lc rgb '#b4533c' lw 2\n"
     "set style line 3 lc rgb '#d4a03f' lw 2\nset style line 4 lc rgb '#77506f' lw 2\n"
     "set style line 5 lc rgb '#4a6183' lw 2\nset style line 6 lc rgb '#8ba57c' lw 2\n";
@@ -243,9 +243,13 @@ std::vector<std::string> plot_log(const std::string& dir) {
   std::vector<std::string> written;
   auto out = [&](const char* name) { return (fs::path(dir) / name).string(); };
 
+  // the total is not conserved in general: say why it moves
   render_plot(gnuplot, tmp, out("energy.png"), "Energy",
               x +
                   "set ylabel 'energy (erg)'\n"
+                  "set label 1 'total = kinetic + potential: damping takes energy out, moving "
+                  "pins, clamps and objects put it in or take it out' at graph 0.01, graph 1.03 "
+                  "font ',9' noenhanced\n"
                   "plot " +
                   d +
                   " u 1:2 w l ls 1 t 'kinetic', '' u 1:3 w l ls 2 t 'potential', "
@@ -258,21 +262,30 @@ std::vector<std::string> plot_log(const std::string& dir) {
               viol + "plot " + d + " u 1:4 w l ls 2 t 'max |C|'\n");
   written.push_back(out("constraints.png"));
 
-  render_plot(gnuplot, tmp, out("contact.png"), "Contact",
-              x +
-                  "set ylabel 'contact pairs'\nset y2label 'min contact distance (cm)'\n"
-                  "set ytics nomirror\nset y2tics\nset key top left box opaque\n"
-                  "plot " +
-                  d +
-                  " u 1:5 w l ls 1 t 'contact pairs' axes x1y1, "
-                  "'' u 1:6 w l ls 2 t 'min contact distance (cm)' axes x1y2\n");
+  bool touching = false;
+  for (const auto& r : data.rows) touching |= r[5] >= 0;
+  const std::string closest =
+      touching ? ", '' u 1:($6 >= 0 ? $6 : 1/0) w l ls 2 t 'closest approach d (none: no "
+                 "contact)' axes x1y2\n"
+               : "\n";
+  render_plot(
+      gnuplot, tmp, out("contact.png"), "Contact",
+      x +
+          (touching ? ""
+                    : "set label 2 'no yarn touches another' at graph 0.5, graph 0.5 center\n") +
+          "set ylabel 'contact pairs'\n"
+          "set y2label 'closest approach d = distance / 2r' noenhanced\n"
+          "set ytics nomirror\nset y2tics\n"
+          // d is −1 in the log where no yarn touches another: not a distance
+          "plot " +
+          d + " u 1:5 w l ls 1 t 'contact pairs' axes x1y1" + closest);
   written.push_back(out("contact.png"));
 
   render_plot(gnuplot, tmp, out("timing.png"), "Performance",
               x +
-                  "set ylabel 'wall time per step (s)'\nset yrange [0:*]\n"
+                  "set ylabel 'wall time per step (µs)'\nset yrange [0:*]\n"
                   "plot " +
-                  d + " u 1:7 w l ls 4 t 'wall time per step'\n");
+                  d + " u 1:($7 * 1e6) w l ls 4 t 'wall time per step'\n");
   written.push_back(out("timing.png"));
 
   // forces.png: |F| of every pin, glue and clamp (columns <group>_fx, _fy, _fz)
@@ -298,7 +311,7 @@ std::vector<std::string> plot_log(const std::string& dir) {
     }
     const std::string fdat = (tmp.path / "forces.dat").string();
     write_data(forces, fdat);
-    std::string body = x + "set ylabel 'force (dyn)'\nset key top right box opaque\nplot ";
+    std::string body = x + "set ylabel 'force (dyn)'\nset key below\nplot ";
     for (size_t g = 1; g < forces.columns.size(); ++g)
       body += (g == 1 ? quoted(fdat) : std::string(", ''")) + " u 1:" + std::to_string(g + 1) +
               " w l ls " + std::to_string((g - 1) % 6 + 1) + " t " +
@@ -348,7 +361,7 @@ std::string plot_series(const std::vector<PlotSeries>& series, const std::string
   const fs::path out(out_png);
   TempDir tmp(out.has_parent_path() ? out.parent_path() : fs::path("."));
   std::string body = "set xlabel " + quoted(xlabel) + " noenhanced\nset ylabel " + quoted(ylabel) +
-                     " noenhanced\nset key top left box opaque\nplot ";
+                     " noenhanced\nset key below\nplot ";
   for (size_t k = 0; k < series.size(); ++k) {
     CsvTable t;
     t.columns = {"x", "y"};
