@@ -171,18 +171,26 @@ function setFrame(f) {
       "t = " + time.toFixed(3) + " s   (frame " + (f + 1) + " of " + data.times.length + ")";
 }
 
-// the camera frames the first frame: a flat knit (thin in z) from its front face, a little
-// tilted, with its wale up; anything else from the front and above, z up
-setFrame(0);
+// the camera frames every frame (the control points' box holds the curves): a flat knit
+// (thin in z) from its front face, a little tilted, with its wale up; anything else from the
+// front and above, z up
 const box = new THREE.Box3();
-for (const Y of yarns) { Y.geom.computeBoundingBox(); box.union(Y.geom.boundingBox); }
+const rmax = Math.max.apply(null, data.radius);
+for (let i = 0; i + 2 < Q.length; i += 3)
+  box.expandByPoint(new THREE.Vector3(Q[i], Q[i + 1], Q[i + 2]));
+box.expandByScalar(rmax);
 const centre = box.getCenter(new THREE.Vector3()), size = box.getSize(new THREE.Vector3());
 const extent = Math.max(size.x, size.y, size.z, 1e-3);
-if (size.z < 0.5 * Math.min(size.x, size.y)) {
-  camera.up.set(0, 1, 0);
-  camera.position.set(centre.x + 0.25 * extent, centre.y - 0.5 * extent, centre.z + 1.9 * extent);
-} else {
-  camera.position.set(centre.x + 0.2 * extent, centre.y - 1.9 * extent, centre.z + 0.9 * extent);
+const flat = size.z < 0.5 * Math.min(size.x, size.y);
+if (flat) camera.up.set(0, 1, 0);
+// far enough that the box's width and height fit the view, with a margin
+function frameCamera() {
+  const tan = Math.tan(camera.fov * Math.PI / 360);
+  const w = flat ? size.x : Math.hypot(size.x, size.y), h = flat ? size.y : size.z + 0.5 * size.y;
+  const d = 1.15 * Math.max(h / 2, w / 2 / camera.aspect) / tan + (flat ? size.z : 0.5 * extent);
+  const dir = flat ? new THREE.Vector3(0.12, -0.25, 1) : new THREE.Vector3(0.2, -1.9, 0.9);
+  dir.normalize();
+  camera.position.copy(centre).addScaledVector(dir, d);
 }
 camera.near = extent / 100;
 camera.far = extent * 100;
@@ -231,6 +239,8 @@ function tick(now) {
   requestAnimationFrame(tick);
 }
 resize();
+frameCamera();
+controls.update();
 const wanted = /frame=(\d+)/.exec(window.location.hash);
 show(wanted ? Math.min(Number(wanted[1]), data.times.length - 1) : 0);
 window.knitsimReady = true;
