@@ -145,19 +145,7 @@ void append_objects(std::string& out, const std::vector<StateFile>& frames,
 
 std::string usda_text(const std::vector<StateFile>& frames, const std::vector<double>& times,
                       const std::vector<std::shared_ptr<const SceneObject>>& objects) {
-  if (frames.empty()) throw std::invalid_argument("USD export: no states");
-  if (times.size() != frames.size())
-    throw std::invalid_argument("USD export: " + std::to_string(times.size()) + " times for " +
-                                std::to_string(frames.size()) + " states");
-  for (size_t f = 0; f < frames.size(); ++f) {
-    check_state_file(frames[f], "USD export: state " + std::to_string(f));
-    if (frames[f].yarn_cp_counts != frames[0].yarn_cp_counts)
-      throw std::invalid_argument("USD export: state " + std::to_string(f) +
-                                  " has a different yarn layout from state 0");
-    if (f > 0 && !(times[f] > times[f - 1]))
-      throw std::invalid_argument("USD export: times must increase (state " + std::to_string(f) +
-                                  ")");
-  }
+  check_state_sequence(frames, times, "USD export");
   const bool animated = frames.size() > 1;
   double fps = 24;
   if (animated) fps = static_cast<double>(frames.size() - 1) / (times.back() - times.front());

@@ -36,6 +36,22 @@ std::vector<Eigen::Matrix3Xd> yarn_control_points(const StateFile& f) {
   return out;
 }
 
+void check_state_sequence(const std::vector<StateFile>& frames, const std::vector<double>& times,
+                          const std::string& what) {
+  if (frames.empty()) throw std::invalid_argument(what + ": no states");
+  if (times.size() != frames.size())
+    throw std::invalid_argument(what + ": " + std::to_string(times.size()) + " times for " +
+                                std::to_string(frames.size()) + " states");
+  for (size_t f = 0; f < frames.size(); ++f) {
+    check_state_file(frames[f], what + ": state " + std::to_string(f));
+    if (frames[f].yarn_cp_counts != frames[0].yarn_cp_counts)
+      throw std::invalid_argument(what + ": state " + std::to_string(f) +
+                                  " has a different yarn layout from state 0");
+    if (f > 0 && !(times[f] > times[f - 1]))
+      throw std::invalid_argument(what + ": times must increase (state " + std::to_string(f) + ")");
+  }
+}
+
 std::vector<Eigen::Matrix3Xd> sample_yarns(const StateFile& f, int per_segment) {
   std::vector<Eigen::Matrix3Xd> out;
   for (const auto& cp : yarn_control_points(f)) out.push_back(sample_bspline(cp, per_segment));

@@ -14,6 +14,12 @@ namespace knit {
 /// with its yarn layout or a yarn has fewer than 4 control points.
 void check_state_file(const StateFile& file, const std::string& what);
 
+/// Throws std::invalid_argument (prefixed by `what`) unless `frames` is a sequence one file
+/// can hold: at least one state, a time for each, every state valid and with state 0's yarn
+/// layout, times increasing.
+void check_state_sequence(const std::vector<StateFile>& frames, const std::vector<double>& times,
+                          const std::string& what);
+
 /// Control points (3×m, cm) of every yarn.
 std::vector<Eigen::Matrix3Xd> yarn_control_points(const StateFile& file);
 

@@ -250,21 +250,10 @@ window.knitsimReady = true;
 
 std::string viewer_html(const std::vector<StateFile>& frames, const std::vector<double>& times,
                         const ViewerOptions& o) {
-  if (frames.empty()) throw std::invalid_argument("viewer: no states");
-  if (times.size() != frames.size())
-    throw std::invalid_argument("viewer: " + std::to_string(times.size()) + " times for " +
-                                std::to_string(frames.size()) + " states");
+  check_state_sequence(frames, times, "viewer");
   if (o.samples_per_segment < 1 || o.samples_per_segment > 64)
     throw std::invalid_argument("viewer: samples per segment must be in [1, 64]");
   if (o.sides < 3 || o.sides > 64) throw std::invalid_argument("viewer: sides must be in [3, 64]");
-  for (size_t f = 0; f < frames.size(); ++f) {
-    check_state_file(frames[f], "viewer: state " + std::to_string(f));
-    if (frames[f].yarn_cp_counts != frames[0].yarn_cp_counts)
-      throw std::invalid_argument("viewer: state " + std::to_string(f) +
-                                  " has a different yarn layout from state 0");
-    if (f > 0 && !(times[f] > times[f - 1]))
-      throw std::invalid_argument("viewer: times must increase (state " + std::to_string(f) + ")");
-  }
   const size_t ncp = static_cast<size_t>(frames[0].num_cp());
   const long long bytes = static_cast<long long>(frames.size() * ncp * 12 * 4 / 3);
   if (bytes > o.max_bytes)
