@@ -8,9 +8,10 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/setup.sh
-bash scripts/apt-install.sh --why test python3-pytest
+tools=(python3-pytest)
 skip=${KNIT_SKIP_READERS:-${KNIT_SKIP_BLENDER:-0}}
 if [ -z "$skip" ] || [ "$skip" = 0 ]; then
-  bash scripts/apt-install.sh --why "test (readers of the exports)" blender assimp-utils python3-vtk9 chromium
+  tools+=(blender assimp-utils python3-vtk9 chromium)
 fi
+bash scripts/apt-install.sh --why "test (pytest and the readers of the exports)" "${tools[@]}"
 ctest --test-dir "${KNIT_BUILD_DIR:-build}" -j "$(nproc)" --output-on-failure "$@"
