@@ -11,7 +11,7 @@ packages=(
   zlib1g-dev libstb-dev libtinygltf-dev libgtest-dev libgmock-dev libbenchmark-dev
   libopenvdb-dev libboost-iostreams-dev
   ffmpeg gnuplot-nox clang-format
-  python3-dev python3-numpy pybind11-dev libjs-three
+  python3-dev python3-numpy pybind11-dev libjs-three libfreetype-dev fonts-dejavu-core
 )
 bash scripts/apt-install.sh --why setup "${packages[@]}"
 [ "${1:-}" != --install-only ] || exit 0

@@ -167,6 +167,43 @@ TEST(RenderImage, ScaleBarAndCaptionAreDrawnInTheCorners) {
   EXPECT_EQ(changed(0, 480, 0, 280), 0);
 }
 
+// Labels come from a TrueType font through FreeType: anti-aliased edges, sizes that follow
+// the pixel height and the text, and the non-ASCII signs knitsim's captions use.
+TEST(RenderImage, LabelsAreAntiAliasedTrueTypeText) {
+  ASSERT_FALSE(label_font_path().empty())
+      << "no TrueType font: scripts/setup.sh installs Debian's fonts-dejavu-core";
+  const Eigen::Vector2i small = text_size("1 cm", 16), big = text_size("1 cm", 32);
+  EXPECT_EQ(small.y(), 16);
+  EXPECT_EQ(big.y(), 32);
+  EXPECT_NEAR(big.x(), 2 * small.x(), 3);
+  EXPECT_GT(text_size("stockinette", 16).x(), text_size("rib", 16).x());
+  EXPECT_EQ(text_size("a\nb", 16).y(), 32);
+  auto drawn = [](const std::string& text) {
+    Image im(120, 40, Eigen::Vector3f::Ones());
+    draw_text(im, 4, 4, text, 28, Eigen::Vector3f::Zero());
+    return im;
+  };
+  const Image im = drawn("2 mm");
+  int ink = 0, grey = 0;
+  for (int y = 0; y < im.height; ++y)
+    for (int x = 0; x < im.width; ++x) {
+      const float v = im.pixel(x, y).x();
+      ink += v < 0.5f;
+      grey += v > 0.1f && v < 0.9f;
+    }
+  EXPECT_GT(ink, 40);
+  EXPECT_GT(grey, 10) << "edges are blended, not a bitmap font's hard squares";
+  // the micro and times signs are glyphs of their own, not the '?' of a missing one
+  auto differs = [&](const Image& a, const Image& b) { return a.rgb != b.rgb; };
+  EXPECT_TRUE(differs(drawn("\u00b5s"), drawn("?s")));
+  EXPECT_TRUE(differs(drawn("2\u00d72"), drawn("2?2")));
+  EXPECT_TRUE(differs(drawn("\u00b5s"), drawn("\u00d7s")));
+  // clipped at the image's edges, not written outside it
+  Image tiny(8, 8, Eigen::Vector3f::Ones());
+  draw_text(tiny, -5, -5, "WWW", 40, Eigen::Vector3f::Zero());
+  draw_text(tiny, 6, 6, "WWW", 40, Eigen::Vector3f::Zero());
+}
+
 TEST(RenderImage, PngLabelsAndComposition) {
   Image a(40, 30, Eigen::Vector3f(1, 0, 0)), b(50, 30, Eigen::Vector3f(0, 0, 1));
   const Image both = compose_side_by_side({a, b}, {"stockinette", "rib"});

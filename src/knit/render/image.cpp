@@ -1,5 +1,5 @@
 // Image storage, PNG output (stb_image_write, compiled static into this file so it cannot
-// clash with another copy) and labels drawn with stb_easy_font.
+// clash with another copy) and side-by-side panels with labels (text.cpp draws them).
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -16,7 +16,6 @@
 #pragma GCC diagnostic ignored "-Wunused-function"
 #pragma GCC diagnostic ignored "-Wsign-compare"
 #endif
-#include <stb_easy_font.h>
 #include <stb_image_write.h>
 #if defined(__GNUC__)
 #pragma GCC diagnostic pop
@@ -56,46 +55,6 @@ void write_png(const Image& image, const std::string& path) {
   write_file_atomic(path, bytes);
 }
 
-namespace {
-// stb_easy_font only knows printable ASCII
-std::string printable(const std::string& text) {
-  std::string s = text;
-  for (char& c : s)
-    if (c != '\n' && (static_cast<unsigned char>(c) < 32 || static_cast<unsigned char>(c) > 126))
-      c = '?';
-  return s;
-}
-}  // namespace
-
-Eigen::Vector2i text_size(const std::string& text, int scale) {
-  std::string s = printable(text);
-  if (s.empty()) return {0, 0};
-  return {stb_easy_font_width(s.data()) * scale, stb_easy_font_height(s.data()) * scale};
-}
-
-void draw_text(Image& image, int x0, int y0, const std::string& text, int scale,
-               const Eigen::Vector3f& color) {
-  std::string s = printable(text);
-  if (s.empty()) return;
-  std::vector<char> buffer(s.size() * 270 + 64);  // stb's estimate: ≤ ~270 bytes per char
-  const int quads =
-      stb_easy_font_print(0, 0, s.data(), nullptr, buffer.data(), static_cast<int>(buffer.size()));
-  for (int q = 0; q < quads; ++q) {
-    float xs[4], ys[4];
-    for (int v = 0; v < 4; ++v) {
-      std::memcpy(&xs[v], buffer.data() + q * 64 + v * 16, sizeof(float));
-      std::memcpy(&ys[v], buffer.data() + q * 64 + v * 16 + 4, sizeof(float));
-    }
-    const int qx0 = x0 + static_cast<int>(std::lround(*std::min_element(xs, xs + 4) * scale));
-    const int qx1 = x0 + static_cast<int>(std::lround(*std::max_element(xs, xs + 4) * scale));
-    const int qy0 = y0 + static_cast<int>(std::lround(*std::min_element(ys, ys + 4) * scale));
-    const int qy1 = y0 + static_cast<int>(std::lround(*std::max_element(ys, ys + 4) * scale));
-    for (int y = std::max(qy0, 0); y < std::min(qy1, image.height); ++y)
-      for (int x = std::max(qx0, 0); x < std::min(qx1, image.width); ++x)
-        image.set_pixel(x, y, color);
-  }
-}
-
 Image compose_side_by_side(const std::vector<Image>& images,
                            const std::vector<std::string>& labels) {
   if (images.empty()) throw std::invalid_argument("compose_side_by_side: no images");
@@ -104,10 +63,10 @@ Image compose_side_by_side(const std::vector<Image>& images,
     height = std::max(height, im.height);
     width += im.width;
   }
-  const int scale = std::max(2, height / 160);
+  const int px = std::max(14, height / 18);  // label height, pixels
   bool any_label = false;
   for (const auto& l : labels) any_label |= !l.empty();
-  const int strip = any_label ? text_size("Ag", scale).y() + 4 * scale : 0;
+  const int strip = any_label ? text_size("Ag", px).y() + px / 2 : 0;
   const int gap = 4;
   width += gap * static_cast<int>(images.size() - 1);
   Image out(width, height + strip, Eigen::Vector3f::Ones());
@@ -117,8 +76,8 @@ Image compose_side_by_side(const std::vector<Image>& images,
     for (int y = 0; y < im.height; ++y)
       for (int c = 0; c < im.width; ++c) out.set_pixel(x + c, y, im.pixel(c, y));
     if (i < labels.size() && !labels[i].empty()) {
-      const Eigen::Vector2i size = text_size(labels[i], scale);
-      draw_text(out, x + (im.width - size.x()) / 2, height + 2 * scale, labels[i], scale,
+      const Eigen::Vector2i size = text_size(labels[i], px);
+      draw_text(out, x + (im.width - size.x()) / 2, height + px / 4, labels[i], px,
                 Eigen::Vector3f(0.15f, 0.15f, 0.15f));
     }
     x += im.width + gap;

@@ -202,6 +202,7 @@ std::string format_length(double cm) {
 void annotate(Image& image, const RenderOptions& opt, const Camera& cam,
               const Eigen::Vector3d& centre) {
   const int scale = std::max(1, std::min(image.width, image.height) / 240);
+  const int px = std::max(12, std::min(image.width, image.height) / 30);  // text height
   const int margin = 6 * scale;
   const Eigen::Vector3f ink(0.15f, 0.15f, 0.17f);
   if (opt.scale_bar) {
@@ -218,13 +219,13 @@ void annotate(Image& image, const RenderOptions& opt, const Camera& cam,
           image.set_pixel(x1 - 1 - t, y, ink);
         }
       const std::string label = format_length(length);
-      const Eigen::Vector2i size = text_size(label, scale);
-      draw_text(image, x1 - size.x(), y0 - 5 * scale - size.y(), label, scale, ink);
+      const Eigen::Vector2i size = text_size(label, px);
+      draw_text(image, x1 - size.x(), y0 - 3 * scale - size.y(), label, px, ink);
     }
   }
   if (!opt.caption.empty()) {
-    const Eigen::Vector2i size = text_size(opt.caption, scale);
-    draw_text(image, margin, image.height - margin - size.y(), opt.caption, scale, ink);
+    const Eigen::Vector2i size = text_size(opt.caption, px);
+    draw_text(image, margin, image.height - margin - size.y(), opt.caption, px, ink);
   }
 }
 

@@ -95,12 +95,17 @@ Image render_state(const StateFile& state, const RenderOptions& options);
 /// Writes a PNG atomically. Throws std::runtime_error on failure.
 void write_png(const Image& image, const std::string& path);
 
-/// Draws `text` (ASCII) with its top left corner at (x, y), each font pixel `scale` image
-/// pixels wide, clipped to the image.
-void draw_text(Image& image, int x, int y, const std::string& text, int scale,
+/// Draws `text` (UTF-8; '\n' starts a new line) anti-aliased in DejaVu Sans with FreeType,
+/// `pixel_height` pixels per line, its top left corner at (x, y), clipped to the image.
+/// The font is looked up once: $KNIT_FONT, else Debian's fonts-dejavu-core; without it
+/// the text is drawn in a built-in bitmap font (stb_easy_font, ASCII only) and a warning
+/// is printed once.
+void draw_text(Image& image, int x, int y, const std::string& text, int pixel_height,
                const Eigen::Vector3f& color);
-/// Width and height in image pixels of `text` drawn at `scale`.
-Eigen::Vector2i text_size(const std::string& text, int scale);
+/// Width and height in image pixels of `text` drawn at `pixel_height`.
+Eigen::Vector2i text_size(const std::string& text, int pixel_height);
+/// The TrueType font labels are drawn with, or "" when the bitmap fallback is in use.
+std::string label_font_path();
 
 /// Places images side by side (equal heights expected) on a white strip, each with its
 /// label centred beneath it (labels may be empty).
