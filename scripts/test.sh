@@ -3,15 +3,18 @@
 # Besides the build's packages the suite needs pytest (the Python module's tests) and the
 # real readers it opens our exports in: Blender (OBJ, PLY; Debian's blender, about 106 MB
 # to download, 440 MB installed, once), Assimp (glTF; assimp-utils), VTK (VTP, as ParaView
-# reads it; python3-vtk9) and Chromium (the viewer page, headless). KNIT_SKIP_READERS=1 (or
-# KNIT_SKIP_BLENDER=1) neither installs the readers nor runs the tests that need them.
+# reads it; python3-vtk9), Chromium (the viewer page, headless) and three.js's USDA parser
+# (the .usda; run by Debian's nodejs, fetched from npm by scripts/fetch-usda-parser.sh).
+# KNIT_SKIP_READERS=1 (or KNIT_SKIP_BLENDER=1) neither installs the readers nor runs the
+# tests that need them.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/setup.sh
 tools=(python3-pytest)
 skip=${KNIT_SKIP_READERS:-${KNIT_SKIP_BLENDER:-0}}
 if [ -z "$skip" ] || [ "$skip" = 0 ]; then
-  tools+=(blender assimp-utils python3-vtk9 chromium)
+  tools+=(blender assimp-utils python3-vtk9 chromium nodejs)
 fi
 bash scripts/apt-install.sh --why "test (pytest and the readers of the exports)" "${tools[@]}"
+if [ -z "$skip" ] || [ "$skip" = 0 ]; then bash scripts/fetch-usda-parser.sh; fi
 ctest --test-dir "${KNIT_BUILD_DIR:-build}" -j "$(nproc)" --output-on-failure "$@"

@@ -24,14 +24,6 @@ struct ExportArgs {
   std::vector<std::shared_ptr<const knit::SceneObject>> objects;
 };
 
-// the file name extension each format writes
-std::string extension_of(const std::string& format) {
-  if (format == "usd") return ".usda";
-  if (format == "obj-mesh") return ".obj";
-  if (format == "ply-mesh") return ".ply";
-  return "." + format;
-}
-
 std::string lower(std::string s) {
   for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   return s;
@@ -41,7 +33,7 @@ std::string lower(std::string s) {
 // misread it
 void check_extension(const ExportArgs& a) {
   const std::string ext = lower(fs::path(a.out).extension().string());
-  const std::string want = extension_of(a.format);
+  const std::string want = knit::export_extension(a.format);
   if (a.format == "usd" && (ext == ".usdc" || ext == ".usdz"))
     throw std::invalid_argument("--out " + a.out +
                                 ": knitsim writes USD as text; name it .usda (or .usd); " + ext +
@@ -67,17 +59,12 @@ knit::StateFile in_axes(knit::StateFile s, const ExportArgs& a) {
 
 void write_one(const knit::StateFile& state, const ExportArgs& a, const std::string& out) {
   const knit::StateFile s = a.y_up || a.metres ? in_axes(state, a) : state;
-  if (a.format == "obj") knit::export_obj(s, out, a.samples);
-  if (a.format == "bcc") knit::export_bcc(s, out, a.samples);
-  if (a.format == "ply") knit::export_ply(s, out, !a.ascii, a.samples);
-  if (a.format == "vtp") knit::export_vtp(s, out, a.samples);
-  if (a.format == "usd") knit::export_usd({s}, {s.state.time}, out, a.objects);
-  if (a.format == "obj-mesh" || a.format == "ply-mesh" || a.format == "glb") {
-    const knit::TubeMesh m = knit::tube_mesh(s, a.samples, a.sides);
-    knit::write_file_atomic(out, a.format == "obj-mesh"   ? knit::obj_mesh_text(m)
-                                 : a.format == "ply-mesh" ? knit::ply_mesh_bytes(m)
-                                                          : knit::glb_bytes(m));
-  }
+  knit::ExportOptions o;
+  o.samples = a.samples;
+  o.sides = a.sides;
+  o.binary_ply = !a.ascii;
+  o.objects = a.objects;
+  knit::export_state(s, a.format, out, o);
 }
 
 void run_export(ExportArgs a) {
@@ -122,7 +109,7 @@ void run_export(ExportArgs a) {
   fs::create_directories(a.out);
   for (const auto& f : files) {
     const std::string out =
-        (fs::path(a.out) / fs::path(f).stem()).string() + extension_of(a.format);
+        (fs::path(a.out) / fs::path(f).stem()).string() + knit::export_extension(a.format);
     write_one(knit::read_state_file(f), a, out);
   }
   std::cout << "wrote " << files.size() << " " << a.format << " files to " << a.out << "\n";
@@ -142,7 +129,7 @@ void register_export(CLI::App& app) {
                   "per-point radius, yarn, row, column, velocity for ParaView), obj-mesh, "
                   "ply-mesh, glb (yarn tubes as triangles; glb in metres, Y up)")
       ->required()
-      ->check(CLI::IsMember({"usd", "obj", "bcc", "ply", "vtp", "obj-mesh", "ply-mesh", "glb"}));
+      ->check(CLI::IsMember(knit::export_formats()));
   sub->add_option("--out,-o", args->out, "output file (a directory for several obj/bcc/ply)")
       ->required();
   sub->add_option("--samples", args->samples, "polyline samples per spline segment (obj, bcc, ply)")

@@ -94,8 +94,10 @@ std::unique_ptr<tbb::global_control> make_thread_control(int threads) {
 void add_export_option(CLI::App* cmd, std::string& format) {
   cmd->add_option(
          "--export", format,
-         "also export the result: usd (every state, time-sampled), obj, bcc or ply (final state)")
-      ->check(CLI::IsMember({"usd", "obj", "bcc", "ply"}));
+         "also export the result: usd (every state, time-sampled, as frames.usda), or the "
+         "final state as final.EXT in obj, bcc, ply, vtp (polylines), obj-mesh, ply-mesh or "
+         "glb (yarn tubes); `knitsim export` has the options")
+      ->check(CLI::IsMember(knit::export_formats()));
 }
 
 void export_run(const std::string& out_dir, const std::string& format,
@@ -120,10 +122,10 @@ void export_run(const std::string& out_dir, const std::string& format,
     return;
   }
   const knit::StateFile final_state = knit::read_state_file((dir / "final.kstate").string());
-  const std::string path = (dir / ("final." + format)).string();
-  if (format == "obj") knit::export_obj(final_state, path);
-  if (format == "bcc") knit::export_bcc(final_state, path);
-  if (format == "ply") knit::export_ply(final_state, path);
+  const std::string path = (dir / ("final" + knit::export_extension(format))).string();
+  knit::ExportOptions options;
+  options.objects = objects;
+  knit::export_state(final_state, format, path, options);
   std::cout << "exported the final state to " << path << "\n";
 }
 

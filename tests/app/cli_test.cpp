@@ -76,7 +76,7 @@ namespace {
 TEST(Cli, RelaxSmallSwatchWritesShapeSummaryAndExport) {
   const std::string out = temp_dir("cli_relax");
   const Result r =
-      run("relax stockinette --rows 4 --cols 5 --max-time 0.005 --quiet --export obj --out " + out);
+      run("relax stockinette --rows 4 --cols 5 --max-time 0.005 --quiet --export glb --out " + out);
   ASSERT_EQ(r.code, 0) << r.output;
   std::ifstream in(out + "/summary.json");
   const auto s = nlohmann::json::parse(in);
@@ -106,7 +106,7 @@ TEST(Cli, RelaxSmallSwatchWritesShapeSummaryAndExport) {
   EXPECT_GT(wale, 0.97);
   EXPECT_LT(wale, 1.01);
   EXPECT_LT(s["edge_curl"].get<double>(), 0.1);
-  for (const char* f : {"/initial.kstate", "/relaxed.kstate", "/final.obj", "/log.csv"})
+  for (const char* f : {"/initial.kstate", "/relaxed.kstate", "/final.glb", "/log.csv"})
     EXPECT_TRUE(fs::exists(out + f)) << f;
 }
 

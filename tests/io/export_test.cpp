@@ -6,8 +6,11 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <map>
 #include <regex>
 #include <sstream>
+
+#include <nlohmann/json.hpp>
 
 #include "io/external_readers.hpp"
 #include "io/test_states.hpp"
@@ -209,6 +212,81 @@ TEST(ExportUsd, BlenderImportsIt) {
   EXPECT_EQ(rc, 0) << messages;
 }
 
+// The .usda read by an independent parser (three.js's USDA parser, run by Node): the
+// stage's units and axis, one BasisCurves prim per yarn with a point, width, colour and
+// velocity per control point, the points time-sampled per frame, an object's Mesh prim.
+TEST(ExportUsd, ThreeJsUsdaParserReadsIt) {
+  KNIT_REQUIRE_READER(node, "node", "nodejs");
+  const std::filesystem::path parser =
+      std::filesystem::path(KNIT_SOURCE_DIR) / "third_party/three-usda/USDAParser.js";
+  if (!std::filesystem::exists(parser)) {
+    if (test::readers_skip_requested()) GTEST_SKIP() << "KNIT_SKIP_READERS is set";
+    FAIL() << parser << " is missing: scripts/fetch-usda-parser.sh fetches it (scripts/test.sh "
+           << "runs it)";
+  }
+  std::vector<StateFile> frames;
+  for (int f = 0; f < 3; ++f) {
+    StateFile s = test::state_of(
+        {test::helix_control_points(), test::helix_control_points(0.5, 1, 2, 30)}, 0.125, 0, true);
+    s.state.q.array() += 0.5 * f;
+    s.state.time = 0.1 * f;
+    frames.push_back(s);
+  }
+  auto ball = std::make_shared<SceneObject>();
+  ball->name = "ball";
+  ball->shape = make_sphere(Eigen::Vector3d::Zero(), 1);
+  const auto dir = test::temp_dir("usd-three");
+  const std::string usd = (dir / "run.usda").string();
+  export_usd(frames, {0.0, 0.1, 0.2}, usd, {ball});
+  std::string messages;
+  const int rc = run_process({node, std::string(KNIT_SOURCE_DIR) + "/tests/io/usda_check.mjs",
+                              parser.string(), usd, (dir / "parsed.json").string()},
+                             messages);
+  const std::string out = slurp(dir / "parsed.json");
+  std::filesystem::remove_all(dir);
+  ASSERT_EQ(rc, 0) << messages;
+  const nlohmann::json j = nlohmann::json::parse(out);
+  EXPECT_EQ(j["root"]["upAxis"], "Z");
+  EXPECT_DOUBLE_EQ(j["root"]["metersPerUnit"].get<double>(), 0.01);
+  const auto& specs = j["specs"];
+  std::vector<std::string> curves, meshes;
+  for (const auto& [path, spec] : specs.items()) {
+    const std::string type = spec["fields"].value("typeName", "");
+    if (spec["specType"] == 6 && type == "BasisCurves") curves.push_back(path);
+    if (spec["specType"] == 6 && type == "Mesh") meshes.push_back(path);
+  }
+  ASSERT_EQ(curves.size(), 2u) << out.substr(0, 2000);
+  EXPECT_EQ(meshes.size(), 1u);
+  std::sort(curves.begin(), curves.end());
+  for (int y = 0; y < 2; ++y) {
+    const std::string& c = curves[y];
+    EXPECT_EQ(c.substr(c.rfind('/')), "/yarn_" + std::to_string(y));
+    const long n = frames[0].yarn_cp_counts[y];
+    auto field = [&](const std::string& attr) -> const nlohmann::json& {
+      const std::string key = c + "." + attr;
+      EXPECT_TRUE(specs.contains(key)) << key;
+      return specs.contains(key) ? specs[key]["fields"] : specs["/"]["fields"];
+    };
+    EXPECT_EQ(field("type")["default"], "cubic");
+    EXPECT_EQ(field("basis")["default"], "bspline");
+    EXPECT_EQ(field("wrap")["default"], "nonperiodic");
+    EXPECT_EQ(field("curveVertexCounts")["default"], nlohmann::json::array({n}));
+    // (the parser flattens arrays of tuples: 3 numbers per point)
+    EXPECT_EQ(field("widths")["default"].size(), static_cast<size_t>(n));
+    EXPECT_EQ(field("primvars:displayColor")["default"].size(), static_cast<size_t>(3 * n));
+    const auto& samples = field("points")["timeSamples"];
+    ASSERT_EQ(samples["times"], nlohmann::json::array({0, 1, 2}));
+    for (int f = 0; f < 3; ++f) {
+      const auto& pts = samples["values"][f];
+      ASSERT_EQ(pts.size(), static_cast<size_t>(3 * n)) << "frame " << f;
+      const Eigen::Index first = 3 * frames[f].yarn_cp_begin()[y];
+      for (Eigen::Index k = 0; k < 3 * n; ++k)
+        ASSERT_NEAR(pts[k].get<double>(), frames[f].state.q[first + k], 1e-5) << k;
+    }
+    EXPECT_EQ(field("velocities")["timeSamples"]["values"][2].size(), static_cast<size_t>(3 * n));
+  }
+}
+
 // An object's surface as OBJ opens in Blender as one closed mesh: every vertex, every edge
 // shared by two triangles (E = 3T/2), where the sphere is.
 TEST(ExportObjectMesh, BlenderImportsAClosedSurface) {
@@ -287,6 +365,34 @@ TEST(ExportUsd, ObjectsBecomeMeshPrimsWithTheirMotion) {
   // the floor does not move: no time samples
   const std::string floor_prim = text.substr(text.find("def Mesh \"object_floor_1\""));
   EXPECT_EQ(floor_prim.find("timeSamples"), std::string::npos);
+}
+
+// One entry point writes every format (the CLI's export and --export use it): a file with
+// the format's extension and its signature; an unknown format is refused by name.
+TEST(ExportState, EveryFormatWritesItsFile) {
+  const auto dir = test::temp_dir("export-state");
+  const StateFile s = test::helix_state();
+  const std::map<std::string, std::string> signature = {
+      {"usd", "#usda 1.0"}, {"obj", "o yarn_0"}, {"bcc", "BCC"},        {"ply", "ply\n"},
+      {"vtp", "<?xml"},     {"obj-mesh", "o "},  {"ply-mesh", "ply\n"}, {"glb", "glTF"}};
+  for (const std::string& format : export_formats()) {
+    const auto path = dir / ("out-" + format + export_extension(format));
+    export_state(s, format, path.string());
+    const std::string text = slurp(path);
+    ASSERT_TRUE(signature.count(format)) << format;
+    EXPECT_NE(text.find(signature.at(format)), std::string::npos) << format;
+    EXPECT_LT(text.find(signature.at(format)), 200u) << format;
+  }
+  EXPECT_EQ(export_extension("usd"), ".usda");
+  EXPECT_EQ(export_extension("ply-mesh"), ".ply");
+  try {
+    export_state(s, "stl", (dir / "x.stl").string());
+    ADD_FAILURE() << "stl accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("'stl'"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir / "x.stl"));
+  std::filesystem::remove_all(dir);
 }
 
 TEST(ExportObj, RoundTripReproducesTheCurve) {

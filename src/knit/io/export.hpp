@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "knit/io/state_file.hpp"
+#include "knit/io/tube_mesh.hpp"
 #include "knit/objects/object.hpp"
 
 namespace knit {
@@ -61,5 +62,24 @@ void export_ply(const StateFile& state, const std::string& path, bool binary = t
 std::string vtp_text(const StateFile& state, int per_segment = EXPORT_SAMPLES_PER_SEGMENT);
 void export_vtp(const StateFile& state, const std::string& path,
                 int per_segment = EXPORT_SAMPLES_PER_SEGMENT);
+
+/// Every format export_state writes: usd, obj, bcc, ply, vtp, obj-mesh, ply-mesh, glb.
+const std::vector<std::string>& export_formats();
+/// The file name extension `format` writes (".usda", ".obj", ".ply", ".glb", ...).
+/// Throws std::invalid_argument for a format not in export_formats().
+std::string export_extension(const std::string& format);
+
+struct ExportOptions {
+  int samples = EXPORT_SAMPLES_PER_SEGMENT;  ///< polyline samples per spline segment
+  int sides = TUBE_SIDES;                    ///< tube mesh sides
+  bool binary_ply = true;                    ///< ply: binary little-endian, else ascii
+  /// usd: a scene's objects, written after the yarns
+  std::vector<std::shared_ptr<const SceneObject>> objects;
+};
+
+/// Writes one state in `format` (one of export_formats()) to `path`, atomically.
+/// Throws std::invalid_argument for an unknown format or bad options.
+void export_state(const StateFile& state, const std::string& format, const std::string& path,
+                  const ExportOptions& options = {});
 
 }  // namespace knit
