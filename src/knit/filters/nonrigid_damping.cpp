@@ -205,13 +205,14 @@ NonRigidDampingFilter::NonRigidDampingFilter(const Model& model, RegionList regi
 
 void NonRigidDampingFilter::apply(const Model& model, const Eigen::VectorXd& q, Eigen::VectorXd& v,
                                   double /*time*/, double /*h*/) {
-  const Eigen::Matrix3Xd x = m_samples.positions(model, q);
+  // the sample buffers are kept between steps: no allocation (nor page faults) per step
+  m_samples.positions(model, q, m_x);
   for (const RigidRegionPass& pass : m_passes) {
     if (pass.alpha() == 0 || pass.regions().empty()) continue;
-    const Eigen::Matrix3Xd u = m_samples.velocities(model, v);
-    Eigen::Matrix3Xd dv = Eigen::Matrix3Xd::Zero(3, m_samples.num_samples());
-    pass.velocity_change(m_samples, x, u, dv);
-    m_samples.apply(model, dv, v);
+    m_samples.positions(model, v, m_u);  // the velocities: the same basis applied to v
+    m_dv.setZero(3, m_samples.num_samples());
+    pass.velocity_change(m_samples, m_x, m_u, m_dv);
+    m_samples.apply(model, m_dv, v);
   }
 }
 

@@ -92,6 +92,7 @@ class NonRigidDampingFilter : public VelocityFilter {
  private:
   SampleSegments m_samples;
   std::vector<RigidRegionPass> m_passes;
+  Eigen::Matrix3Xd m_x, m_u, m_dv;  // sample positions, velocities, velocity changes
 };
 
 }  // namespace knit

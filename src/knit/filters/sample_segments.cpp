@@ -28,7 +28,14 @@ SampleSegments::SampleSegments(const Model& model, int samples_per_segment)
 }
 
 Eigen::Matrix3Xd SampleSegments::positions(const Model& model, const Eigen::VectorXd& q) const {
-  Eigen::Matrix3Xd x(3, num_samples());
+  Eigen::Matrix3Xd x;
+  positions(model, q, x);
+  return x;
+}
+
+void SampleSegments::positions(const Model& model, const Eigen::VectorXd& q,
+                               Eigen::Matrix3Xd& x) const {
+  x.resize(3, num_samples());
   tbb::parallel_for(tbb::blocked_range<int>(0, model.num_seg(), 64),
                     [&](const tbb::blocked_range<int>& r) {
                       for (int i = r.begin(); i < r.end(); ++i) {
@@ -37,7 +44,6 @@ Eigen::Matrix3Xd SampleSegments::positions(const Model& model, const Eigen::Vect
                           x.col(i * m_per + k) = combine(seg, m_basis[k]);
                       }
                     });
-  return x;
 }
 
 Eigen::Matrix3Xd SampleSegments::velocities(const Model& model, const Eigen::VectorXd& v) const {
@@ -48,7 +54,8 @@ void SampleSegments::apply(const Model& model, const Eigen::Matrix3Xd& dv,
                            Eigen::VectorXd& v) const {
   const int nseg = model.num_seg();
   // per segment: the impulse on each of its 4 control points
-  std::vector<Vector12d> slot(nseg);
+  std::vector<Vector12d>& slot = m_slot;
+  slot.resize(nseg);
   tbb::parallel_for(tbb::blocked_range<int>(0, nseg, 64), [&](const tbb::blocked_range<int>& r) {
     for (int i = r.begin(); i < r.end(); ++i) {
       slot[i].setZero();

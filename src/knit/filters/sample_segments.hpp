@@ -34,6 +34,8 @@ class SampleSegments {
 
   /// Midpoint positions (cm) of all samples, 3 × num_samples.
   Eigen::Matrix3Xd positions(const Model& model, const Eigen::VectorXd& q) const;
+  /// The same into `out` (resized; no allocation when it already has the size).
+  void positions(const Model& model, const Eigen::VectorXd& q, Eigen::Matrix3Xd& out) const;
   /// Midpoint velocities (cm/s): the same basis applied to the control-point velocities.
   Eigen::Matrix3Xd velocities(const Model& model, const Eigen::VectorXd& v) const;
   /// v += M⁻¹ J with J_k = Σ_s m_s B_k(t_s) dv_s (dv: 3 × num_samples, cm/s). Parallel and
@@ -48,6 +50,8 @@ class SampleSegments {
   int m_per;
   std::vector<double> m_mass;
   std::vector<Eigen::Vector4d> m_basis;  // B_a(t_k) for k < n
+  // apply's per-segment impulses, kept between calls (no allocation per step)
+  mutable std::vector<Vector12d> m_slot;
 };
 
 }  // namespace knit
