@@ -17,7 +17,7 @@ namespace knitsim {
 
 void register_relax(CLI::App& app) {
   struct Opts {
-    std::string pattern, out, from, resume, export_format;
+    std::string pattern, out, from, resume, export_format, integrator = "explicit";
     knit::RelaxKnitOptions knit;
     knit::RelaxYarnsOptions yarns;
     knit::RelaxOptions run;
@@ -82,6 +82,7 @@ void register_relax(CLI::App& app) {
          "--time-step", o->time_step,
          "s (default 1/11800; 1/25000 with --from: imported swatches start tightly packed)")
       ->check(finite_range(knit::param_range("time_step").min, knit::param_range("time_step").max));
+  add_integrator_option(cmd, o->integrator);
   cmd->add_option("--max-time", o->run.max_time,
                   "simulated seconds at most (with --resume: seconds more)")
       ->check(finite_positive(knit::MAX_DURATION));
@@ -141,6 +142,7 @@ void register_relax(CLI::App& app) {
       if (given("--alpha-small")) p.material.alpha_small = o->material.alpha_small;
       if (given("--alpha-large")) p.material.alpha_large = o->material.alpha_large;
       if (given("--time-step")) p.solver.time_step = o->time_step;
+      p.solver.integrator = knit::parse_integrator(o->integrator);
       p.discretisation.contact_points = o->contact_points;
       o->yarns.shrink = o->shrink;
       o->yarns.run = o->run;
@@ -151,6 +153,7 @@ void register_relax(CLI::App& app) {
       p.material = o->material;
       p.discretisation.contact_points = o->contact_points;
       p.solver.time_step = o->time_step;
+      p.solver.integrator = knit::parse_integrator(o->integrator);
       o->knit.shrink = o->shrink;
       o->knit.run = o->run;
       knit::State resumed;

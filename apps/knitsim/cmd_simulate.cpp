@@ -17,7 +17,8 @@ void register_simulate(CLI::App& app) {
     int threads = 0;
     double duration = 0;
     bool quiet = false, overwrite = false;
-    std::string export_format;
+    std::string export_format, integrator;
+    double time_step = 0;
   };
   auto opts = std::make_shared<Opts>();
   CLI::App* cmd = app.add_subcommand("simulate", "run a scene file (JSON) and write its states");
@@ -36,12 +37,18 @@ void register_simulate(CLI::App& app) {
   add_threads_option(cmd, opts->threads);
   cmd->add_option("--duration", opts->duration, "override the scene's duration (s)")
       ->check(finite_positive(knit::MAX_DURATION));
+  cmd->add_option("--time-step", opts->time_step, "override the scene's time step (s)")
+      ->check(finite_range(knit::param_range("time_step").min, knit::param_range("time_step").max));
+  add_integrator_option(cmd, opts->integrator);
   cmd->add_flag("--quiet,-q", opts->quiet, "no progress line");
   add_export_option(cmd, opts->export_format);
   cmd->callback([opts, cmd]() {
     // everything is validated before anything is written
     knit::Scene scene = opts->knit.empty() ? knit::load_scene(opts->scene)
                                            : knit::load_scene_with_knit(opts->scene, opts->knit);
+    if (cmd->count("--time-step")) scene.model.params.solver.time_step = opts->time_step;
+    if (cmd->count("--integrator"))
+      scene.model.params.solver.integrator = knit::parse_integrator(opts->integrator);
     if (cmd->count("--duration")) {
       knit::check_duration(opts->duration, scene.model.params.solver.time_step);
       scene.duration = opts->duration;

@@ -91,6 +91,14 @@ std::unique_ptr<tbb::global_control> make_thread_control(int threads) {
                                                static_cast<size_t>(threads));
 }
 
+void add_integrator_option(CLI::App* cmd, std::string& integrator) {
+  cmd->add_option("--integrator", integrator,
+                  "explicit: explicit midpoint for every term (the reference); imex: the same "
+                  "but the length energy taken by a linearly implicit Euler step, which lifts "
+                  "the time-step limit its stiffness sets (docs/model.md §5.2)")
+      ->check(CLI::IsMember({"explicit", "imex"}));
+}
+
 void add_export_option(CLI::App* cmd, std::string& format) {
   cmd->add_option(
          "--export", format,

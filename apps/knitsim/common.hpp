@@ -31,6 +31,9 @@ CLI::Validator finite_range(double lo, double hi);
 /// A CLI11 check: a finite number > 0 and at most `hi`.
 CLI::Validator finite_positive(double hi = 1e300);
 
+/// --integrator explicit|imex (knit::Integrator), into `integrator`.
+void add_integrator_option(CLI::App* cmd, std::string& integrator);
+
 /// Adds --threads N (0 = all cores).
 void add_threads_option(CLI::App* cmd, int& threads);
 /// Limits TBB to `threads` workers for the lifetime of the returned object (0: no limit).

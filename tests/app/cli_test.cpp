@@ -50,6 +50,24 @@ TEST(Cli, PendulumExampleRunsAndSummarises) {
   EXPECT_TRUE(fs::exists(out + "/frames/state_000005.kstate"));
 }
 
+// --integrator and --time-step override the scene's: the summary records what ran, and an
+// integrator that does not exist is refused by name.
+TEST(Cli, SimulateTakesTheIntegratorAndTimeStepAsked) {
+  const std::string out = temp_dir("cli_imex");
+  const Result r = run(std::string("simulate ") + KNIT_EXAMPLES + "/pendulum.json --out " + out +
+                       " --duration 0.05 --time-step 2e-4 --integrator imex --quiet");
+  ASSERT_EQ(r.code, 0) << r.output;
+  std::ifstream in(out + "/summary.json");
+  const auto s = nlohmann::json::parse(in);
+  EXPECT_EQ(s["params"]["solver"]["integrator"], "imex");
+  EXPECT_EQ(s["steps"], 250);
+  EXPECT_GT(s["stage_seconds"].value("implicit", 0.0), 0.0) << "the implicit stage never ran";
+  const Result bad = run(std::string("simulate ") + KNIT_EXAMPLES + "/pendulum.json --out " +
+                         temp_dir("cli_imex_bad") + " --integrator implicit");
+  EXPECT_NE(bad.code, 0);
+  EXPECT_NE(bad.output.find("--integrator"), std::string::npos) << bad.output;
+}
+
 TEST(Cli, UnstableRunStopsWithStatusAndKeepsLastGoodState) {
   const std::string scene = ::testing::TempDir() + "/cli_unstable.json";
   std::ofstream(scene) << R"({"yarns": [{"line": {"from": [0,0,0], "to": [5,0,0], "segments": 10}}],

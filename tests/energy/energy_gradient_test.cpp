@@ -2,6 +2,8 @@
 // assembled over a yarn, including a straight yarn, a tight bend and coincident points.
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
+
 #include "fd_check.hpp"
 #include "knit/energy/bending.hpp"
 #include "knit/energy/global_damping.hpp"
@@ -56,6 +58,42 @@ TEST(EnergyKernels, BendingGradientMatchesFiniteDifferences) {
       return bending_kernel(Vector12d(y), 0.5, 5.0, q, nullptr);
     };
     expect_gradient_matches(f, x, g, 1e-7, 1e-5, std::string("bending/") + c.name);
+  }
+}
+
+// The length energy's Hessian (the implicit integrator's stiffness): column k of the exact
+// Hessian is the central difference of the analytic gradient along coordinate k; the
+// projected one is symmetric positive semidefinite, and equals the exact one where no
+// quadrature point is compressed.
+TEST(EnergyKernels, LengthHessianMatchesFiniteDifferencesOfTheGradient) {
+  const QuadratureTable q = simpson_table(11);
+  for (const Case& c : cases()) {
+    for (double stretch : {0.9, 1.1}) {  // rest length below / above the arc length
+      const double rest = stretch * segment_arclength(c.x, q);
+      const Matrix12d hess = length_hessian(c.x, rest, 2000.0, q, LengthHessian::EXACT);
+      const double eps = 1e-6;
+      Matrix12d fd;
+      for (int k = 0; k < 12; ++k) {
+        Vector12d xp = c.x, xm = c.x, gp = Vector12d::Zero(), gm = Vector12d::Zero();
+        xp[k] += eps;
+        xm[k] -= eps;
+        length_kernel(xp, rest, 2000.0, q, &gp);
+        length_kernel(xm, rest, 2000.0, q, &gm);
+        fd.col(k) = (gp - gm) / (2 * eps);
+      }
+      const std::string what =
+          std::string("length Hessian/") + c.name + (stretch < 1 ? "/stretched" : "/compressed");
+      const double scale = fd.cwiseAbs().maxCoeff();
+      ASSERT_GT(scale, 0.0) << what;
+      EXPECT_LT((hess - fd).cwiseAbs().maxCoeff(), 1e-5 * scale) << what;
+      const Matrix12d proj = length_hessian(c.x, rest, 2000.0, q, LengthHessian::PROJECTED);
+      EXPECT_LT((proj - proj.transpose()).cwiseAbs().maxCoeff(), 1e-12 * scale) << what;
+      const Eigen::SelfAdjointEigenSolver<Matrix12d> eig(proj);
+      EXPECT_GT(eig.eigenvalues().minCoeff(), -1e-10 * scale) << what;
+      // evenly spaced control points on a line: uniform speed, stretched everywhere
+      if (stretch < 1 && std::string(c.name) == "straight")
+        EXPECT_LT((proj - hess).cwiseAbs().maxCoeff(), 1e-12 * scale) << what;
+    }
   }
 }
 

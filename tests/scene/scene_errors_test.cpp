@@ -65,6 +65,12 @@ TEST(SceneErrors, NegativeOrNonFiniteParametersAreRejected) {
   expect_error(scene_with(R"(, "time_step": -0.001)"), {"time_step", "positive"});
   expect_error(scene_with(R"(, "params": {"alpha_small": 1.5})"), {"params.alpha_small", "[0, 1]"});
   expect_error(scene_with(R"(, "params": {"k_len": "stiff"})"), {"params.k_len", "number"});
+  expect_error(scene_with(R"(, "params": {"integrator": "implicit"})"),
+               {"params.integrator", "\"explicit\" or \"imex\"", "implicit"});
+  EXPECT_EQ(parse_scene(nlohmann::json::parse(scene_with(R"(, "params": {"integrator": "imex"})")),
+                        "scene.json")
+                .model.params.solver.integrator,
+            Integrator::IMEX);
   expect_error(scene_with(R"(, "params": {"quadrature_points": 10})"),
                {"quadrature_points", "odd"});
   // JSON text has no NaN literal, but a document built in code can hold one

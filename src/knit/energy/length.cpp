@@ -1,5 +1,8 @@
 #include "knit/energy/length.hpp"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <cmath>
 
 namespace knit {
@@ -41,6 +44,59 @@ lanes::VecD length_kernel_lanes(const lanes::VecD x[12], lanes::VecD rest_length
       for (int c = 0; c < 3; ++c) grad[3 * a + c] += db[a] * (coef * d1[c]);
   }
   return k_len * e;
+}
+
+Matrix12d length_hessian(const Vector12d& x, double rest_length, double k_len,
+                         const QuadratureTable& quad, LengthHessian kind) {
+  // per quadrature point the 3×3 block is A = c u uᵀ + β I (c = α − β, α = 2 k w / ℓ²,
+  // β = −2 k w g / (ℓ |y'|)); block (a, b) of H is Σ_k B_a' B_b' A_k. Summed over the ten
+  // pairs a ≤ b and the six entries of the symmetric u uᵀ, then mirrored.
+  constexpr int XX = 0, XY = 1, XZ = 2, YY = 3, YZ = 4, ZZ = 5;
+  double outer[10][6] = {}, iso[10] = {};
+  const double inv_l = 1.0 / rest_length;
+  for (int k = 0; k < quad.size(); ++k) {
+    const Eigen::Vector4d& db = quad.db[k];
+    const Eigen::Vector3d d1 = combine(x, db);
+    const double speed = std::sqrt(d1.squaredNorm() + SPEED_EPS);
+    const double g = 1.0 - speed * inv_l;
+    const double transverse = kind == LengthHessian::EXACT ? g : std::min(g, 0.0);
+    const double alpha = 2.0 * k_len * quad.w[k] * inv_l * inv_l;
+    const double beta = -2.0 * k_len * quad.w[k] * transverse * inv_l / speed;
+    const double c = (alpha - beta) / (speed * speed);  // times d1 d1ᵀ = |y'|² u uᵀ
+    const double m[6] = {c * d1.x() * d1.x(), c * d1.x() * d1.y(), c * d1.x() * d1.z(),
+                         c * d1.y() * d1.y(), c * d1.y() * d1.z(), c * d1.z() * d1.z()};
+    int pair = 0;
+    for (int a = 0; a < 4; ++a)
+      for (int b = a; b < 4; ++b, ++pair) {
+        const double s = db[a] * db[b];
+        for (int e = 0; e < 6; ++e) outer[pair][e] += s * m[e];
+        iso[pair] += s * beta;
+      }
+  }
+  Matrix12d h;
+  int pair = 0;
+  for (int a = 0; a < 4; ++a)
+    for (int b = a; b < 4; ++b, ++pair) {
+      const double* o = outer[pair];
+      Eigen::Matrix3d block;
+      block << o[XX] + iso[pair], o[XY], o[XZ], o[XY], o[YY] + iso[pair], o[YZ], o[XZ], o[YZ],
+          o[ZZ] + iso[pair];
+      h.block<3, 3>(3 * a, 3 * b) = block;
+      if (b != a) h.block<3, 3>(3 * b, 3 * a) = block;
+    }
+  return h;
+}
+
+void LengthEnergy::segment_stiffness(const Model& model, const Eigen::VectorXd& q,
+                                     std::vector<Matrix12d>& blocks) {
+  const int n = model.num_seg();
+  blocks.resize(n);
+  const double k = model.params.material.k_len;
+  tbb::parallel_for(tbb::blocked_range<int>(0, n, 256), [&](const tbb::blocked_range<int>& r) {
+    for (int i = r.begin(); i < r.end(); ++i)
+      blocks[i] = length_hessian(q.segment<12>(3 * model.seg_cp[i]), model.rest_length[i], k,
+                                 model.quad, LengthHessian::PROJECTED);
+  });
 }
 
 double LengthEnergy::add_force(const Model& model, const Eigen::VectorXd& q,

@@ -2,9 +2,11 @@
 // A physical term of the equations of motion M q̈ = −∇E − ∇_q̇ D + f_ext (MODEL.md §2).
 #include <Eigen/Core>
 #include <string_view>
+#include <vector>
 
 #include "knit/model/model.hpp"
 #include "knit/model/step_data.hpp"
+#include "knit/spline/basis.hpp"
 
 namespace knit {
 
@@ -25,6 +27,14 @@ class Term {
   /// Number of add_force calls so far (counted by the terms that are costly to evaluate;
   /// -1 when not counted).
   virtual long long evaluations() const { return -1; }
+  /// True for a term the IMEX integrator takes implicitly: it gives segment_stiffness.
+  /// Its force must depend on q alone (not on v or time).
+  virtual bool has_stiffness() const { return false; }
+  /// Where has_stiffness: its stiffness K ≈ ∂²E/∂q² at q as one positive-semidefinite
+  /// 12×12 block per segment (over the segment's four control points; blocks[i] for
+  /// segment i; resized here).
+  virtual void segment_stiffness(const Model& model, const Eigen::VectorXd& q,
+                                 std::vector<Matrix12d>& blocks) {}
   /// Potential energy alone (erg) at `time`.
   virtual double energy(const Model& model, const Eigen::VectorXd& q, double time) {
     Eigen::VectorXd f = Eigen::VectorXd::Zero(q.size());

@@ -90,4 +90,15 @@ void validate_params(const Params& p) {
                                   " is outside its working range [-1e5, 1e5] cm/s²");
 }
 
+const char* integrator_name(Integrator integrator) {
+  return integrator == Integrator::IMEX ? "imex" : "explicit";
+}
+
+Integrator parse_integrator(const std::string& name) {
+  if (name == "explicit") return Integrator::EXPLICIT;
+  if (name == "imex") return Integrator::IMEX;
+  throw std::invalid_argument("unknown integrator '" + name +
+                              "' (known: explicit, imex: the length energy linearly implicit)");
+}
+
 }  // namespace knit

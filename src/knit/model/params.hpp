@@ -32,9 +32,22 @@ struct Discretisation {
   int contact_points = 10;     ///< contact quadrature points per segment (MODEL.md §8: 10–20)
 };
 
+/// How a step integrates the forces before the projection and the filters:
+///   EXPLICIT  explicit midpoint for every term (MODEL.md §5.2; the reference)
+///   IMEX      explicit midpoint for every term but those that give a stiffness (the
+///             length energy), which take one linearly implicit Euler step instead:
+///             (M + h² K) Δv = h f(q) − h² K v. Their stiffness along the yarn bounds the
+///             explicit step (bench_step_limit); taken implicitly it no longer does.
+enum class Integrator { EXPLICIT, IMEX };
+/// "explicit" or "imex".
+const char* integrator_name(Integrator integrator);
+/// The integrator named `name`; throws std::invalid_argument naming the known ones.
+Integrator parse_integrator(const std::string& name);
+
 /// Time stepping and constraint projection.
 struct SolverSettings {
-  double time_step = 1.0 / 11800;      ///< h (s), MODEL.md §8
+  double time_step = 1.0 / 11800;  ///< h (s), MODEL.md §8
+  Integrator integrator = Integrator::EXPLICIT;
   bool length_constraints = true;      ///< enforce C_i = 0 by projection (off in relaxation)
   double constraint_tolerance = 1e-6;  ///< projection stops when max |C| is below (C_len is
                                        ///< dimensionless, pin/glue/clamp rows in cm)

@@ -325,7 +325,7 @@ Params parse_params(const JsonReader& r, Params p) {
   r.allow_keys({"preset", "radius", "density", "k_len", "k_bend", "k_global", "k_contact", "k_dt",
                 "k_dn", "alpha_small", "alpha_large", "quadrature_points", "contact_points",
                 "length_constraints", "contact", "constraint_tolerance",
-                "max_projection_iterations", "time_step"});
+                "max_projection_iterations", "time_step", "integrator"});
   if (r.has("preset")) {
     const std::string preset = r.at("preset").string();
     if (preset == "simulation")
@@ -363,6 +363,12 @@ Params parse_params(const JsonReader& r, Params p) {
   if (r.has("max_projection_iterations"))
     p.solver.max_projection_iterations = r.at("max_projection_iterations").integer(1);
   if (r.has("time_step")) p.solver.time_step = r.at("time_step").positive();
+  if (r.has("integrator")) {
+    const std::string name = r.at("integrator").string();
+    if (name != "explicit" && name != "imex")
+      r.at("integrator").fail("expected \"explicit\" or \"imex\", got \"" + name + "\"");
+    p.solver.integrator = parse_integrator(name);
+  }
   // every field within its working range (params.hpp), named by its key
   for (const ParamRange& range : param_ranges())
     if (r.has(range.name)) {

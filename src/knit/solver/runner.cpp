@@ -130,6 +130,7 @@ nlohmann::json params_json(const Params& p) {
             {"contact_points", p.discretisation.contact_points}}},
           {"solver",
            {{"time_step", p.solver.time_step},
+            {"integrator", integrator_name(p.solver.integrator)},
             {"length_constraints", p.solver.length_constraints},
             {"constraint_tolerance", p.solver.constraint_tolerance},
             {"max_projection_iterations", p.solver.max_projection_iterations}}},

@@ -155,12 +155,22 @@ void Simulator::forward(const State& state, double known_violation) {
     m_data.objects[k] = ObjectRecord{m_model.objects[k]->name};
   double e = 0;
   Eigen::Vector3d before = Eigen::Vector3d::Zero();
+  // with the IMEX integrator the implicit terms' force at q is also kept on its own
+  const bool imex = m_model.params.solver.integrator == Integrator::IMEX;
+  if (imex) m_force_implicit.setZero(state.q.size());
   for (size_t t = 0; t < m_terms.size(); ++t) {
     Term& term = *m_terms[t];
     TermRecord& rec = m_data.terms[t];
     {
       ScopedTimer timer(m_data.stage_seconds[std::string(term.name())]);
-      rec.energy = term.add_force(m_model, state.q, state.v, state.time, m_force0);
+      if (imex && term.has_stiffness()) {
+        m_force_term.setZero(state.q.size());
+        rec.energy = term.add_force(m_model, state.q, state.v, state.time, m_force_term);
+        m_force_implicit += m_force_term;
+        m_force0 += m_force_term;
+      } else {
+        rec.energy = term.add_force(m_model, state.q, state.v, state.time, m_force0);
+      }
     }
     ScopedTimer timer(m_data.stage_seconds["record"]);
     e += rec.energy;
@@ -191,6 +201,48 @@ void Simulator::unconstrained_step(const State& s, double h, Eigen::VectorXd& q_
   v_out = s.v + h * inv_m.cwiseProduct(m_force);
 }
 
+bool Simulator::imex_step(const State& s, double h, Eigen::VectorXd& q_out,
+                          Eigen::VectorXd& v_out) {
+  const Eigen::VectorXd& inv_m = m_model.inv_mass3;
+  forward(s);  // every term's force at (q, v), recorded; the implicit terms' also on its own
+  // the implicit terms' stiffness at q, summed
+  bool any = false;
+  {
+    ScopedTimer timer(m_data.stage_seconds["stiffness"]);
+    for (auto& term : m_terms) {
+      if (!term->has_stiffness()) continue;
+      term->segment_stiffness(m_model, s.q, any ? m_term_blocks : m_blocks);
+      if (any)
+        for (size_t i = 0; i < m_blocks.size(); ++i) m_blocks[i] += m_term_blocks[i];
+      any = true;
+    }
+  }
+  // explicit midpoint on the other terms
+  m_qmid = s.q + 0.5 * h * s.v;
+  m_vmid = s.v + 0.5 * h * inv_m.cwiseProduct(m_force0 - m_force_implicit);
+  m_force.setZero(s.q.size());
+  for (auto& term : m_terms) {
+    if (term->has_stiffness()) continue;
+    ScopedTimer timer(m_data.stage_seconds[std::string(term->name())]);
+    term->add_force(m_model, m_qmid, m_vmid, s.time + 0.5 * h, m_force);
+  }
+  q_out = s.q + h * m_vmid;
+  v_out = s.v + h * inv_m.cwiseProduct(m_force);
+  if (!any) return true;
+  // linearly implicit Euler on the stiff terms: (M + h² K) Δv = h f − h² K v_e
+  ScopedTimer timer(m_data.stage_seconds["implicit"]);
+  if (!m_stiff.factor(m_model, m_blocks, h * h)) return false;
+  m_rhs = h * m_force_implicit;
+  for (int i = 0; i < m_model.num_seg(); ++i) {
+    const int base = 3 * m_model.seg_cp[i];
+    m_rhs.segment<12>(base) -= (h * h) * (m_blocks[i] * v_out.segment<12>(base));
+  }
+  m_stiff.solve(m_rhs, m_dv);
+  v_out += m_dv;
+  q_out += h * m_dv;
+  return true;
+}
+
 ProjectionResult Simulator::project(Eigen::VectorXd& q, Eigen::VectorXd& v, double time, double h) {
   ScopedTimer timer(m_data.stage_seconds["projection"]);
   m_qpre = q;
@@ -212,8 +264,18 @@ void Simulator::apply_filters(const Eigen::VectorXd& q, Eigen::VectorXd& v, doub
 
 StepResult Simulator::step(State& state, double h) {
   StepResult res;
-  unconstrained_step(state, h, m_qnew, m_vnew);
   const double t_new = state.time + h;
+  if (m_model.params.solver.integrator == Integrator::IMEX) {
+    if (!imex_step(state, h, m_qnew, m_vnew)) {
+      res.status = StepStatus::NON_FINITE;
+      res.message =
+          "the implicit system M + h² K could not be factored at t = " + std::to_string(t_new) +
+          " s; try a smaller time step";
+      return res;
+    }
+  } else {
+    unconstrained_step(state, h, m_qnew, m_vnew);
+  }
   if (!m_qnew.allFinite() || !m_vnew.allFinite()) {
     res.status = StepStatus::NON_FINITE;
     res.message = "positions or velocities became non-finite in the unconstrained step at t = " +

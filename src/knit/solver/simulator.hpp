@@ -3,6 +3,9 @@
 // and a mutable State, each writing what it found into StepData:
 //   0. forward: the forces at (q, v), recorded (energies, per-term forces, contact set)
 //   1. unconstrained explicit-midpoint step of (q, v)       — one more force evaluation
+//      (with params.solver.integrator = IMEX, the terms that give a stiffness — the length
+//      energy — are left out of it and take one linearly implicit Euler step instead:
+//      stages "stiffness" and "implicit")
 //   2. fast projection onto the constraint groups, v += Δq / h (multipliers, forces)
 //   3. velocity filters (non-rigid damping, object collisions)
 //   4. forward at the result, which the next step reuses as its stage 0
@@ -20,6 +23,7 @@
 #include "knit/model/model.hpp"
 #include "knit/model/state.hpp"
 #include "knit/model/step_data.hpp"
+#include "knit/solver/stiff_solve.hpp"
 
 namespace knit {
 
@@ -76,6 +80,11 @@ class Simulator {
   /// Stage 1: the unconstrained explicit-midpoint step from (q, v) into (q_out, v_out).
   void unconstrained_step(const State& state, double h, Eigen::VectorXd& q_out,
                           Eigen::VectorXd& v_out);
+  /// Stage 1 of the IMEX integrator: the explicit midpoint step of every term without a
+  /// stiffness, then for those with one (K, their force f at q) the linearly implicit
+  /// Euler velocity change (M + h² K) Δv = h f − h² K v_e added to v_e (and h Δv to q_e).
+  /// Returns false when M + h² K could not be factored.
+  bool imex_step(const State& state, double h, Eigen::VectorXd& q_out, Eigen::VectorXd& v_out);
   /// Stage 2: projects q (in place) at `time`, correcting v by the displacement / h.
   ProjectionResult project(Eigen::VectorXd& q, Eigen::VectorXd& v, double time, double h);
   /// Moves the positions onto the constraints (no velocity change): call once before a
@@ -111,6 +120,10 @@ class Simulator {
   Eigen::VectorXd m_cache_q, m_cache_v, m_force0;
   double m_cache_time = 0;
   Eigen::VectorXd m_force, m_qmid, m_vmid, m_qnew, m_vnew, m_qpre;
+  // the IMEX step's implicit part
+  std::vector<Matrix12d> m_blocks, m_term_blocks;
+  Eigen::VectorXd m_force_implicit, m_force_term, m_rhs, m_dv;
+  StiffSolver m_stiff;
 };
 
 /// The default terms for a model's parameters (see Simulator(Model)).

@@ -1,0 +1,205 @@
+// The IMEX integrator (params.solver.integrator = IMEX): explicit midpoint on every term
+// but the length energy, which takes a linearly implicit Euler step. Checked against
+// physics and against the explicit reference step.
+#include <gtest/gtest.h>
+
+#include <limits>
+
+#include "fd_check.hpp"
+#include "knit/recipes/relax_knit.hpp"
+#include "knit/solver/simulator.hpp"
+#include "knit/solver/stiff_solve.hpp"
+
+namespace knit {
+namespace {
+
+Eigen::Matrix3Xd line(int segments, double length) {
+  Eigen::Matrix3Xd cp(3, segments + 3);
+  for (int k = 0; k < segments + 3; ++k)
+    cp.col(k) = Eigen::Vector3d((k - 1) * length / segments, 0, 0);
+  return cp;
+}
+
+// The band Cholesky of M + h² K against Eigen's dense LLT, on two yarns (which must not
+// couple) with random positive-semidefinite segment blocks.
+TEST(Imex, BandSolverMatchesDenseCholesky) {
+  ModelBuilder b;
+  b.add_yarn(line(7, 3.0));
+  b.add_yarn(line(5, 2.0));
+  const Model m = b.build(Params{});
+  std::vector<Matrix12d> blocks(m.num_seg());
+  for (int i = 0; i < m.num_seg(); ++i) {
+    const Eigen::Matrix<double, 12, 6> g = Eigen::Matrix<double, 12, 6>::Random();
+    blocks[i] = 50.0 * g * g.transpose();
+  }
+  const double h2 = 1e-6;
+  Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(m.num_dof(), m.num_dof());
+  for (int d = 0; d < m.num_dof(); ++d) dense(d, d) = m.mass[d / 3];
+  for (int i = 0; i < m.num_seg(); ++i)
+    dense.block<12, 12>(3 * m.seg_cp[i], 3 * m.seg_cp[i]) += h2 * blocks[i];
+  const Eigen::VectorXd rhs = Eigen::VectorXd::Random(m.num_dof());
+  const Eigen::VectorXd expected = dense.llt().solve(rhs);
+  StiffSolver solver;
+  ASSERT_TRUE(solver.factor(m, blocks, h2));
+  Eigen::VectorXd x;
+  solver.solve(rhs, x);
+  EXPECT_LT((x - expected).norm(), 1e-10 * expected.norm());
+  EXPECT_LT((dense * x - rhs).norm(), 1e-10 * rhs.norm());
+  blocks[3] = -blocks[3] * 1e6;  // not positive definite: refused, not solved
+  EXPECT_FALSE(solver.factor(m, blocks, h2));
+}
+
+// A straight yarn stretched 25 % beyond its rest length (length constraints off, as in a
+// relaxation; no gravity, no damping): the length energy pulls it back. With k_len = 1e7
+// its stiffest mode along the yarn has ω ≈ √(k_len / (μ ℓ²)) · O(1), far beyond what the
+// explicit step holds at h = 1e-3 s. The IMEX step stays finite, conserves the linear
+// momentum exactly (the stiffness of a translation is zero, so the implicit correction
+// adds no net force), and with the global damping the yarn settles at its rest length.
+struct Snap {
+  bool ok = true;
+  Eigen::Vector3d momentum0, momentum;
+  double length_error = 0;  // |arc length / rest length − 1| at the end
+};
+
+Snap snap_back(Integrator integrator, double h, double k_global) {
+  ModelBuilder b;
+  b.add_yarn(line(12, 6.0));
+  Params p;
+  p.material.k_len = 1e7;
+  p.material.k_global = k_global;
+  p.gravity = Eigen::Vector3d::Zero();
+  p.solver.length_constraints = false;
+  p.solver.integrator = integrator;
+  Model m = b.build(p, 0.8);
+  Simulator sim(m);
+  State s;
+  s.q = b.positions();
+  s.v = test::jitter(Eigen::VectorXd::Zero(s.q.size()), 5.0, 3);
+  auto momentum = [&](const State& st) {
+    Eigen::Vector3d pm = Eigen::Vector3d::Zero();
+    for (int k = 0; k < m.num_cp(); ++k) pm += m.mass[k] * st.v.segment<3>(3 * k);
+    return pm;
+  };
+  Snap out;
+  out.momentum0 = momentum(s);
+  for (int i = 0; i < 400; ++i)
+    if (!sim.step(s, h).ok()) {
+      out.ok = false;
+      return out;
+    }
+  out.momentum = momentum(s);
+  double arc = 0, rest = 0;
+  for (int i = 0; i < m.num_seg(); ++i) {
+    arc += segment_arclength(s.q.segment<12>(3 * m.seg_cp[i]), m.quad);
+    rest += m.rest_length[i];
+  }
+  out.length_error = std::abs(arc / rest - 1);
+  return out;
+}
+
+TEST(Imex, StiffLengthEnergyIsStableWhereTheExplicitStepFails) {
+  EXPECT_FALSE(snap_back(Integrator::EXPLICIT, 1e-3, 0.0).ok)
+      << "the explicit step should fail here, or the test shows nothing";
+  const Snap free = snap_back(Integrator::IMEX, 1e-3, 0.0);
+  ASSERT_TRUE(free.ok);
+  // (measured: 7e-10 relative after 400 steps, the rounding of 400 sparse solves)
+  EXPECT_LT((free.momentum - free.momentum0).norm(), 1e-8 * free.momentum0.norm())
+      << "linear momentum must be conserved";
+  const Snap damped = snap_back(Integrator::IMEX, 1e-3, 1.0);
+  ASSERT_TRUE(damped.ok);
+  EXPECT_LT(damped.length_error, 1e-3) << "the yarn must settle at its rest length";
+}
+
+// The undamped pendulum of Dynamics.UndampedPendulumEnergyStaysWithinBound with the IMEX
+// step: the total energy never rises above its start and the loss over 1 s stays small
+// and shrinks with h (the implicit part is first order, like the projection).
+double pendulum_loss(double h) {
+  ModelBuilder b;
+  b.add_yarn(line(20, 10.0));
+  b.add_pin({{0, 0.0}, Eigen::Vector3d::Zero()});
+  Params p;
+  p.solver.integrator = Integrator::IMEX;
+  Simulator sim(b.build(p));
+  State s;
+  s.q = b.positions();
+  s.v = Eigen::VectorXd::Zero(s.q.size());
+  const double e0 = sim.kinetic_energy(s) + sim.potential_energy(s);
+  const double mgl = sim.model().mass.sum() * 981 * 10.0;
+  double max_rise = -std::numeric_limits<double>::infinity();
+  for (int i = 0; i < static_cast<int>(std::lround(1.0 / h)); ++i) {
+    EXPECT_TRUE(sim.step(s, h).ok());
+    max_rise = std::max(max_rise, sim.kinetic_energy(s) + sim.potential_energy(s) - e0);
+  }
+  EXPECT_LT(max_rise, 1e-6 * mgl) << "energy must not grow (h = " << h << ")";
+  return (e0 - sim.kinetic_energy(s) - sim.potential_energy(s)) / mgl;
+}
+
+TEST(Imex, UndampedPendulumEnergyStaysWithinBound) {
+  const double coarse = pendulum_loss(2e-4), fine = pendulum_loss(1e-4);
+  EXPECT_GT(coarse, 0.0);
+  EXPECT_LT(coarse, 0.15) << "relative energy loss";
+  EXPECT_LT(fine, 0.75 * coarse) << "the loss must shrink with h";
+}
+
+// A yarn hanging from two pins comes to the same rest with either integrator: the rest is
+// the equilibrium of the forces, which the implicit step does not change.
+Eigen::VectorXd hang(Integrator integrator, double h) {
+  ModelBuilder b;
+  Eigen::Matrix3Xd cp(3, 19);
+  for (int k = 0; k < 19; ++k)
+    cp.col(k) = Eigen::Vector3d((k - 1) * 0.5, 0, -0.08 * (k - 1) * (15 - k));
+  b.add_yarn(cp);
+  b.add_pin({{0, 0.0}, Eigen::Vector3d::Zero()});
+  b.add_pin({{15, 1.0}, Eigen::Vector3d::Zero()});
+  Params p;
+  p.material.k_global = 0.05;
+  p.solver.integrator = integrator;
+  Model m = b.build(p);
+  m.pins[0].origin = point_position(m, b.positions(), {0, 0.0});
+  m.pins[1].origin = point_position(m, b.positions(), {15, 1.0});
+  build_constraint_groups(m);
+  Simulator sim(m);
+  State s;
+  s.q = b.positions();
+  s.v = Eigen::VectorXd::Zero(s.q.size());
+  for (int i = 0; i < static_cast<int>(std::lround(3.0 / h)); ++i)
+    EXPECT_TRUE(sim.step(s, h).ok()) << "step " << i;
+  return s.q;
+}
+
+TEST(Imex, HangingYarnComesToTheExplicitRest) {
+  const Eigen::VectorXd ex = hang(Integrator::EXPLICIT, 1e-4), im = hang(Integrator::IMEX, 1e-4);
+  const double r = Params{}.material.radius;
+  const double diff = (ex - im).reshaped(3, ex.size() / 3).colwise().norm().maxCoeff();
+  EXPECT_LT(diff, 0.01 * r) << "largest control-point distance between the two rests (cm)";
+}
+
+// A relaxed 12×12 stockinette continued at h = 2e-4 s: the explicit step fails within
+// 0.03 s (its limit is about 8.5e-5 s: bench_step_limit), the IMEX step holds, every
+// segment within its working length, and it keeps the knit's shape.
+TEST(Imex, RelaxedKnitHoldsAtTwiceTheExplicitLimit) {
+  RelaxKnitOptions o;
+  o.knit.rows = 12;
+  o.knit.cols = 12;
+  const State start = read_resumed_knit_state(KNIT_EXAMPLES "/knits/stockinette_12x12.kstate",
+                                              "stockinette", o.knit);
+  auto run = [&](Integrator integrator, State& s) {
+    RelaxKnitOptions oi = o;
+    oi.params.solver.integrator = integrator;
+    oi.resume = &start;
+    KnitRelaxation setup = setup_knit_relaxation("stockinette", oi);
+    s = start;
+    for (int i = 0; i < 150; ++i)
+      if (!setup.sim->step(s, 2e-4).ok()) return false;
+    return true;
+  };
+  State ex, im;
+  EXPECT_FALSE(run(Integrator::EXPLICIT, ex)) << "the explicit step should fail at 2e-4 s";
+  ASSERT_TRUE(run(Integrator::IMEX, im));
+  const double r = Params{}.material.radius;
+  const double moved = (im.q - start.q).reshaped(3, start.q.size() / 3).colwise().norm().maxCoeff();
+  EXPECT_LT(moved, r) << "a relaxed knit should stay near its rest in 0.03 s (cm)";
+}
+
+}  // namespace
+}  // namespace knit
