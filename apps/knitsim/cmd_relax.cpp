@@ -73,10 +73,11 @@ void register_relax(CLI::App& app) {
                   "global damping k_global (g/s; default 0.15 for patterns, 1.5 with --from)")
       ->check(finite_range(0, 1e6));
   cmd->add_option("--alpha-small", o->material.alpha_small,
-                  "non-rigid damping of the small regions per step (default 0.3)")
+                  "non-rigid damping of the small regions per 1/11800 s (default 0.3; the same per "
+                  "second at any --time-step)")
       ->check(finite_range(0, 1));
   cmd->add_option("--alpha-large", o->material.alpha_large,
-                  "non-rigid damping of the large regions per step (default 0.3)")
+                  "non-rigid damping of the large regions per 1/11800 s (default 0.3)")
       ->check(finite_range(0, 1));
   cmd->add_option(
          "--time-step", o->time_step,

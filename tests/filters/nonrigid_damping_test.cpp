@@ -206,6 +206,41 @@ TEST(Filter, EachPassLeavesOneMinusAlphaOfTheNonRigidVelocity) {
   }
 }
 
+// α is a strength per reference step (FILTER_REFERENCE_STEP = 1/11800 s): the same damping
+// per unit of time at any step. A pass at step h leaves (1 − α)^(h / h_ref) of the
+// non-rigid velocity, so two steps of h/2 leave what one step of h does; at h_ref it is α.
+TEST(Filter, DampingIsARatePerUnitTime) {
+  const double ref = FILTER_REFERENCE_STEP;
+  EXPECT_EQ(per_step_strength(0.3, ref), 0.3);
+  EXPECT_EQ(per_step_strength(0.3, 0.0), 0.3);
+  EXPECT_EQ(per_step_strength(1.0, 4 * ref), 1.0);
+  EXPECT_EQ(per_step_strength(0.0, 4 * ref), 0.0);
+  for (double alpha : {0.1, 0.3, 0.675})
+    for (double h : {ref / 3, ref, 2.5 * ref, 7 * ref}) {
+      const double half = per_step_strength(alpha, h / 2), whole = per_step_strength(alpha, h);
+      EXPECT_NEAR((1 - half) * (1 - half), 1 - whole, 1e-14) << alpha << " " << h;
+      EXPECT_GT(whole, half);
+    }
+  EXPECT_NEAR(per_step_strength(0.3, 2 * ref), 1 - 0.7 * 0.7, 1e-15);
+  // the whole filter on a swatch: one step of 2 h_ref and two of h_ref damp alike (within
+  // the spline's smoothing of the impulses), where α per step would damp twice as much
+  const Model m = swatch();
+  const Eigen::VectorXd q = positions();
+  NonRigidDampingFilter f(m, 0.3, 0.3);
+  const SampleSegments& s = f.samples();
+  const Eigen::Matrix3Xd x = s.positions(m, q);
+  const Eigen::VectorXd v0 = random_velocity(m.num_dof(), 23);
+  Eigen::VectorXd one = v0, two = v0;
+  f.apply(m, q, one, 0.0, 2 * ref);
+  f.apply(m, q, two, 0.0, ref);
+  f.apply(m, q, two, 0.0, ref);
+  const double before = nonrigid_residual(s, x, s.velocities(m, v0));
+  const double r1 = nonrigid_residual(s, x, s.velocities(m, one));
+  const double r2 = nonrigid_residual(s, x, s.velocities(m, two));
+  EXPECT_LT(r1, 0.9 * before);
+  EXPECT_NEAR(r1, r2, 0.1 * (before - r2)) << "before " << before;
+}
+
 // Which pass damps what (MODEL.md §4). A small region is a stitch and the one below it,
 // so it lies in one column; the large regions (blocks of 4 × 4 stitches) span columns.
 // Columns sliding past each other along the wale (each column moving as a whole, neighbours

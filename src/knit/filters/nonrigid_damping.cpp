@@ -3,6 +3,8 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <cmath>
+
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <map>
@@ -81,8 +83,15 @@ RigidRegionPass::RigidRegionPass(const Model& model, RegionList regions, double 
 // summed once (weights m_s / r(s), r = regions of this pass holding the segment), every
 // region sums its segments' moments and shifts them to its centre (parallel-axis theorem),
 // and every sample's target mean rigid velocity is A_i + B_i × x with per-segment A, B.
+double per_step_strength(double alpha, double h) {
+  if (!(h > 0) || h == FILTER_REFERENCE_STEP) return alpha;
+  return 1.0 - std::pow(1.0 - alpha, h / FILTER_REFERENCE_STEP);
+}
+
 void RigidRegionPass::velocity_change(const SampleSegments& samples, const Eigen::Matrix3Xd& x,
-                                      const Eigen::Matrix3Xd& u, Eigen::Matrix3Xd& dv) const {
+                                      const Eigen::Matrix3Xd& u, Eigen::Matrix3Xd& dv,
+                                      double strength) const {
+  const double alpha = strength < 0 ? m_alpha : strength;
   const int per = samples.samples_per_segment();
   const int nseg = static_cast<int>(m_seg_begin.size()) - 1;
   auto share = [&](int seg) { return m_seg_begin[seg + 1] - m_seg_begin[seg]; };
@@ -167,7 +176,7 @@ void RigidRegionPass::velocity_change(const SampleSegments& samples, const Eigen
                         b /= n;
                         for (int k = 0; k < per; ++k) {
                           const int s = i * per + k;
-                          dv.col(s) += m_alpha * (a + b.cross(x.col(s)) - u.col(s));
+                          dv.col(s) += alpha * (a + b.cross(x.col(s)) - u.col(s));
                         }
                       }
                     });
@@ -204,14 +213,14 @@ NonRigidDampingFilter::NonRigidDampingFilter(const Model& model, RegionList regi
 }
 
 void NonRigidDampingFilter::apply(const Model& model, const Eigen::VectorXd& q, Eigen::VectorXd& v,
-                                  double /*time*/, double /*h*/) {
+                                  double /*time*/, double h) {
   // the sample buffers are kept between steps: no allocation (nor page faults) per step
   m_samples.positions(model, q, m_x);
   for (const RigidRegionPass& pass : m_passes) {
     if (pass.alpha() == 0 || pass.regions().empty()) continue;
     m_samples.positions(model, v, m_u);  // the velocities: the same basis applied to v
     m_dv.setZero(3, m_samples.num_samples());
-    pass.velocity_change(m_samples, m_x, m_u, m_dv);
+    pass.velocity_change(m_samples, m_x, m_u, m_dv, per_step_strength(pass.alpha(), h));
     m_samples.apply(model, m_dv, v);
   }
 }

@@ -41,14 +41,22 @@ RegionList small_stitch_regions(const Model& model);
 RegionList large_stitch_regions(const Model& model, int block = 4, int stride = 2,
                                 bool wrap_columns = false);
 
+/// The time step the damping strengths α are given for: MODEL.md §8's h = 1/11800 s. The
+/// filter damps the same per unit of time at any step: at step h a pass removes the
+/// fraction 1 − (1 − α)^(h / FILTER_REFERENCE_STEP) of the non-rigid velocity (exactly α
+/// at the reference step; two steps of h/2 remove what one of h does).
+constexpr double FILTER_REFERENCE_STEP = 1.0 / 11800;
+/// That per-step strength for α at step h (s); α itself when h is not positive.
+double per_step_strength(double alpha, double h);
+
 /// One pass: the regions, their strength α ∈ [0, 1] and the segment → regions map.
 class RigidRegionPass {
  public:
   RigidRegionPass(const Model& model, RegionList regions, double alpha);
   /// Adds this pass's Δv for every sample (3 × num_samples) from sample positions x and
-  /// velocities u.
+  /// velocities u, at strength `strength` (α of the reference step when negative).
   void velocity_change(const SampleSegments& samples, const Eigen::Matrix3Xd& x,
-                       const Eigen::Matrix3Xd& u, Eigen::Matrix3Xd& dv) const;
+                       const Eigen::Matrix3Xd& u, Eigen::Matrix3Xd& dv, double strength = -1) const;
   double alpha() const { return m_alpha; }
   const RegionList& regions() const { return m_regions; }
 

@@ -21,8 +21,9 @@ struct Material {
   double k_contact = 3250;     ///< yarn–yarn contact stiffness (erg/cm² = g/s²)
   double k_dt = 0.003;         ///< tangential contact damping (g/(cm² s))
   double k_dn = 0.03;          ///< normal contact damping (g/(cm² s))
-  double alpha_small = 0.675;  ///< non-rigid damping, small regions ∈ [0,1] per step
-  double alpha_large = 0.3;    ///< non-rigid damping, large regions ∈ [0,1] per step
+  double alpha_small = 0.675;  ///< non-rigid damping, small regions ∈ [0,1] per step of
+                               ///< 1/11800 s (a rate: per_step_strength)
+  double alpha_large = 0.3;    ///< non-rigid damping, large regions, the same
   bool contact = true;         ///< yarn–yarn contact on/off
 };
 
