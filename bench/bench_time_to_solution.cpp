@@ -1,0 +1,145 @@
+// Time to a result: wall seconds per simulated second of a scene (by default the relaxed
+// 12×12 stockinette hanging from a clamp with the simulation parameters,
+// examples/hanging_knit.json; --knit places another relaxed knit there, e.g. the 42×32),
+// for each integrator and time step asked, and how far each run's shape at the end lies
+// from a reference run (the explicit step at h = 1/11800 s unless told otherwise): the
+// largest control-point distance, in yarn radii. Runs that go unstable say when.
+//   bench_time_to_solution [--scene S] [--knit K] [--time T]
+//                          [--runs explicit:2e-4,imex:4e-4,...] [--reference explicit:H]
+//                          [--threads N]
+#include <CLI/CLI.hpp>
+#include <iostream>
+
+#include "bench_util.hpp"
+#include "knit/recipes/simulate_scene.hpp"
+
+namespace {
+
+struct Spec {
+  knit::Integrator integrator;
+  double h;
+  std::string text;
+};
+
+Spec parse_spec(const std::string& text) {
+  const size_t colon = text.find(':');
+  if (colon == std::string::npos)
+    throw std::invalid_argument("'" + text + "': expected INTEGRATOR:H (e.g. imex:4e-4)");
+  return {knit::parse_integrator(text.substr(0, colon)), std::stod(text.substr(colon + 1)), text};
+}
+
+struct Outcome {
+  bool stable = true;
+  long steps = 0;
+  double failed_at_s = -1;
+  double wall_s = 0;
+  knit::State state;
+  std::map<std::string, double> stage_seconds;
+};
+
+Outcome run(const knit::Scene& base, const Spec& spec, double duration) {
+  knit::Scene scene = base;
+  scene.model.params.solver.time_step = spec.h;
+  scene.model.params.solver.integrator = spec.integrator;
+  auto sim = knit::make_scene_simulator(scene);
+  Outcome o;
+  o.state = scene.state;
+  const double end = o.state.time + duration;
+  const auto t0 = std::chrono::steady_clock::now();
+  while (o.state.time < end - 1e-9 * spec.h) {
+    const double h = std::min(spec.h, end - o.state.time);
+    const knit::StepResult r = sim->step(o.state, h);
+    if (!r.ok()) {
+      o.stable = false;
+      o.failed_at_s = o.state.time;
+      break;
+    }
+    ++o.steps;
+  }
+  o.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  o.stage_seconds = sim->data().stage_seconds;
+  return o;
+}
+
+std::vector<std::string> split(const std::string& s) {
+  std::vector<std::string> out;
+  std::stringstream in(s);
+  for (std::string item; std::getline(in, item, ',');)
+    if (!item.empty()) out.push_back(item);
+  return out;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string scene_path = KNIT_EXAMPLES "/hanging_knit.json", knit_path;
+  std::string runs_text = "explicit:2e-4,imex:2e-4,imex:3e-4,imex:4e-4";
+  std::string reference_text = "explicit:8.474576271186441e-05";  // 1/11800 s
+  double duration = 1.0;
+  int threads = 0;
+  CLI::App app{"bench_time_to_solution: wall seconds per simulated second, and the error"};
+  app.add_option("--scene", scene_path, "scene file (JSON)");
+  app.add_option("--knit", knit_path, "place this relaxed knit (.kstate) in the scene");
+  app.add_option("--time", duration, "simulated seconds per run");
+  app.add_option("--runs", runs_text, "comma-separated INTEGRATOR:H (explicit or imex, s)");
+  app.add_option("--reference", reference_text, "the reference run, INTEGRATOR:H");
+  app.add_option("--threads", threads, "0 = all cores");
+  CLI11_PARSE(app, argc, argv);
+  const auto gc = knit::bench::limit_threads(threads);
+
+  const knit::Scene scene = knit_path.empty() ? knit::load_scene(scene_path)
+                                              : knit::load_scene_with_knit(scene_path, knit_path);
+  const double r = scene.model.params.material.radius;
+  const Spec ref_spec = parse_spec(reference_text);
+  std::vector<Spec> specs{ref_spec};
+  for (const std::string& t : split(runs_text)) specs.push_back(parse_spec(t));
+
+  nlohmann::json runs = nlohmann::json::array();
+  knit::State reference;
+  double reference_rate = 0;
+  for (size_t k = 0; k < specs.size(); ++k) {
+    const Spec& spec = specs[k];
+    const Outcome o = run(scene, spec, duration);
+    if (k == 0) {
+      if (!o.stable)
+        throw std::runtime_error("the reference run " + spec.text +
+                                 " went unstable at t = " + std::to_string(o.failed_at_s) + " s");
+      reference = o.state;
+      reference_rate = o.wall_s / duration;
+    }
+    nlohmann::json j = {{"integrator", knit::integrator_name(spec.integrator)},
+                        {"h", spec.h},
+                        {"reference", k == 0},
+                        {"stable", o.stable},
+                        {"steps", o.steps},
+                        {"wall_s", o.wall_s},
+                        {"us_per_segment_step",
+                         1e6 * o.wall_s / std::max<long>(o.steps, 1) / scene.model.num_seg()},
+                        {"stage_seconds", o.stage_seconds}};
+    if (o.stable) {
+      const double err =
+          (o.state.q - reference.q).reshaped(3, reference.q.size() / 3).colwise().norm().maxCoeff();
+      j["wall_s_per_sim_s"] = o.wall_s / duration;
+      j["speedup_vs_reference"] = reference_rate / (o.wall_s / duration);
+      j["max_error_cm"] = err;
+      j["max_error_radii"] = err / r;
+    } else {
+      j["failed_at_s"] = o.failed_at_s;
+    }
+    std::cerr << "time_to_solution: " << spec.text << ": "
+              << (o.stable ? std::to_string(o.wall_s / duration) + " wall s per sim s, error " +
+                                 std::to_string(j["max_error_radii"].get<double>()) + " r"
+                           : "unstable at t = " + std::to_string(o.failed_at_s) + " s")
+              << "\n";
+    runs.push_back(j);
+  }
+  nlohmann::json out = {{"benchmark", "time_to_solution"},
+                        {"machine", knit::bench::machine_info()},
+                        {"threads", knit::bench::active_threads()},
+                        {"scene", scene_path},
+                        {"knit", knit_path},
+                        {"segments", scene.model.num_seg()},
+                        {"simulated_s", duration},
+                        {"runs", runs}};
+  std::cout << out.dump(2) << "\n";
+}
