@@ -92,14 +92,6 @@ Outcome run(const knit::Model& base, const knit::State& start, const std::string
   return o;
 }
 
-std::vector<std::string> split(const std::string& s) {
-  std::vector<std::string> out;
-  std::stringstream in(s);
-  for (std::string item; std::getline(in, item, ',');)
-    if (!item.empty()) out.push_back(item);
-  return out;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -129,8 +121,8 @@ int main(int argc, char** argv) {
   const knit::Model& model = setup.sim->model();
 
   nlohmann::json runs = nlohmann::json::array();
-  for (const std::string& v : split(variants))
-    for (const std::string& hstr : split(hs)) {
+  for (const std::string& v : knit::bench::split_list(variants))
+    for (const std::string& hstr : knit::bench::split_list(hs)) {
       const double h = std::stod(hstr);
       const Outcome r = run(model, start, v, h, duration, o.params.material.alpha_small,
                             o.params.material.alpha_large, o.knit.in_the_round);

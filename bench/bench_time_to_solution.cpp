@@ -61,14 +61,6 @@ Outcome run(const knit::Scene& base, const Spec& spec, double duration) {
   return o;
 }
 
-std::vector<std::string> split(const std::string& s) {
-  std::vector<std::string> out;
-  std::stringstream in(s);
-  for (std::string item; std::getline(in, item, ',');)
-    if (!item.empty()) out.push_back(item);
-  return out;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -92,7 +84,7 @@ int main(int argc, char** argv) {
   const double r = scene.model.params.material.radius;
   const Spec ref_spec = parse_spec(reference_text);
   std::vector<Spec> specs{ref_spec};
-  for (const std::string& t : split(runs_text)) specs.push_back(parse_spec(t));
+  for (const std::string& t : knit::bench::split_list(runs_text)) specs.push_back(parse_spec(t));
 
   nlohmann::json runs = nlohmann::json::array();
   knit::State reference;

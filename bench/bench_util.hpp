@@ -10,11 +10,21 @@
 #include <ctime>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
 
 namespace knit::bench {
+
+/// The non-empty items of a comma-separated list ("a,b,,c" → a, b, c).
+inline std::vector<std::string> split_list(const std::string& text) {
+  std::vector<std::string> out;
+  std::stringstream in(text);
+  for (std::string item; std::getline(in, item, ',');)
+    if (!item.empty()) out.push_back(item);
+  return out;
+}
 
 inline nlohmann::json machine_info() {
   std::string model = "unknown";

@@ -8,16 +8,13 @@
 #include "knit/energy/bending.hpp"
 #include "knit/energy/length.hpp"
 #include "knit/solver/simulator.hpp"
+#include "yarn_setups.hpp"
 
 namespace knit {
 namespace {
 
-Eigen::Matrix3Xd line(int segments, double length) {
-  Eigen::Matrix3Xd cp(3, segments + 3);
-  for (int k = 0; k < segments + 3; ++k)
-    cp.col(k) = Eigen::Vector3d((k - 1) * length / segments, 0, 0);
-  return cp;
-}
+using test::line;
+using test::pendulum_energy_drift;
 
 // Zero gravity, no pins, a spinning and drifting bent yarn: no external force or torque,
 // so linear and angular momentum are conserved (internal forces are translation- and
@@ -185,28 +182,6 @@ TEST(Dynamics, GlobalDampingDecaysATranslatingYarnExponentially) {
 // at h = 1e-4 s, 3.63 % at 5e-5 s (ratio 0.61); the energy exceeds its start by at most
 // 5e-9 m g L (rounding, in the first steps). Allowed: loss ≤ 7 % (+1 point), rise
 // ≤ 1e-6 m g L, ratio ≤ 0.75.
-double pendulum_energy_drift(double h, double duration) {
-  ModelBuilder b;
-  b.add_yarn(line(20, 10.0));
-  b.add_pin({{0, 0.0}, Eigen::Vector3d::Zero()});
-  Simulator sim(b.build(Params{}));
-  State s;
-  s.q = b.positions();
-  s.v = Eigen::VectorXd::Zero(s.q.size());
-  const double e0 = sim.kinetic_energy(s) + sim.potential_energy(s);
-  const double mgl = sim.model().mass.sum() * 981 * 10.0;
-  double max_rise = -std::numeric_limits<double>::infinity();
-  const int steps = static_cast<int>(std::lround(duration / h));
-  for (int i = 0; i < steps; ++i) {
-    EXPECT_TRUE(sim.step(s, h).ok());
-    // the step's own record: kinetic and potential energy at its result
-    const double e = sim.data().kinetic_energy + sim.data().potential_energy;
-    max_rise = std::max(max_rise, e - e0);
-  }
-  EXPECT_LT(max_rise, 1e-6 * mgl) << "energy must not grow (h = " << h << ")";
-  return (sim.kinetic_energy(s) + sim.potential_energy(s) - e0) / mgl;
-}
-
 TEST(Dynamics, UndampedPendulumEnergyStaysWithinBound) {
   const double drift = pendulum_energy_drift(1e-4, 1.0);
   EXPECT_LT(drift, 0.0) << "the midpoint step with projection dissipates";
@@ -225,22 +200,11 @@ struct HangResult {
 };
 
 HangResult hang(double h) {
-  ModelBuilder b;
-  Eigen::Matrix3Xd cp(3, 19);
-  for (int k = 0; k < 19; ++k)
-    cp.col(k) = Eigen::Vector3d((k - 1) * 0.5, 0, -0.08 * (k - 1) * (15 - k));
-  b.add_yarn(cp);
-  b.add_pin({{0, 0.0}, Eigen::Vector3d::Zero()});
-  b.add_pin({{15, 1.0}, Eigen::Vector3d::Zero()});
   Params p;
   p.material.k_global = 0.02;
-  Model m = b.build(p);
-  m.pins[0].origin = point_position(m, b.positions(), {0, 0.0});
-  m.pins[1].origin = point_position(m, b.positions(), {15, 1.0});
-  build_constraint_groups(m);  // the groups hold copies of the pins
-  Simulator sim(m);
   State s;
-  s.q = b.positions();
+  const Model m = test::hanging_yarn(p, s.q);
+  Simulator sim(m);
   s.v = Eigen::VectorXd::Zero(s.q.size());
   const int steps = static_cast<int>(std::lround(3.0 / h)),
             tail = static_cast<int>(std::lround(0.2 / h));

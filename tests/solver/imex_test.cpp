@@ -9,16 +9,12 @@
 #include "knit/recipes/relax_knit.hpp"
 #include "knit/solver/simulator.hpp"
 #include "knit/solver/stiff_solve.hpp"
+#include "yarn_setups.hpp"
 
 namespace knit {
 namespace {
 
-Eigen::Matrix3Xd line(int segments, double length) {
-  Eigen::Matrix3Xd cp(3, segments + 3);
-  for (int k = 0; k < segments + 3; ++k)
-    cp.col(k) = Eigen::Vector3d((k - 1) * length / segments, 0, 0);
-  return cp;
-}
+using test::line;
 
 // The band Cholesky of M + h² K against Eigen's dense LLT, on two yarns (which must not
 // couple) with random positive-semidefinite segment blocks.
@@ -113,29 +109,9 @@ TEST(Imex, StiffLengthEnergyIsStableWhereTheExplicitStepFails) {
 // The undamped pendulum of Dynamics.UndampedPendulumEnergyStaysWithinBound with the IMEX
 // step: the total energy never rises above its start and the loss over 1 s stays small
 // and shrinks with h (the implicit part is first order, like the projection).
-double pendulum_loss(double h) {
-  ModelBuilder b;
-  b.add_yarn(line(20, 10.0));
-  b.add_pin({{0, 0.0}, Eigen::Vector3d::Zero()});
-  Params p;
-  p.solver.integrator = Integrator::IMEX;
-  Simulator sim(b.build(p));
-  State s;
-  s.q = b.positions();
-  s.v = Eigen::VectorXd::Zero(s.q.size());
-  const double e0 = sim.kinetic_energy(s) + sim.potential_energy(s);
-  const double mgl = sim.model().mass.sum() * 981 * 10.0;
-  double max_rise = -std::numeric_limits<double>::infinity();
-  for (int i = 0; i < static_cast<int>(std::lround(1.0 / h)); ++i) {
-    EXPECT_TRUE(sim.step(s, h).ok());
-    max_rise = std::max(max_rise, sim.kinetic_energy(s) + sim.potential_energy(s) - e0);
-  }
-  EXPECT_LT(max_rise, 1e-6 * mgl) << "energy must not grow (h = " << h << ")";
-  return (e0 - sim.kinetic_energy(s) - sim.potential_energy(s)) / mgl;
-}
-
 TEST(Imex, UndampedPendulumEnergyStaysWithinBound) {
-  const double coarse = pendulum_loss(2e-4), fine = pendulum_loss(1e-4);
+  const double coarse = -test::pendulum_energy_drift(2e-4, 1.0, Integrator::IMEX),
+               fine = -test::pendulum_energy_drift(1e-4, 1.0, Integrator::IMEX);
   EXPECT_GT(coarse, 0.0);
   EXPECT_LT(coarse, 0.15) << "relative energy loss";
   EXPECT_LT(fine, 0.75 * coarse) << "the loss must shrink with h";
@@ -144,23 +120,11 @@ TEST(Imex, UndampedPendulumEnergyStaysWithinBound) {
 // A yarn hanging from two pins comes to the same rest with either integrator: the rest is
 // the equilibrium of the forces, which the implicit step does not change.
 Eigen::VectorXd hang(Integrator integrator, double h) {
-  ModelBuilder b;
-  Eigen::Matrix3Xd cp(3, 19);
-  for (int k = 0; k < 19; ++k)
-    cp.col(k) = Eigen::Vector3d((k - 1) * 0.5, 0, -0.08 * (k - 1) * (15 - k));
-  b.add_yarn(cp);
-  b.add_pin({{0, 0.0}, Eigen::Vector3d::Zero()});
-  b.add_pin({{15, 1.0}, Eigen::Vector3d::Zero()});
   Params p;
   p.material.k_global = 0.05;
   p.solver.integrator = integrator;
-  Model m = b.build(p);
-  m.pins[0].origin = point_position(m, b.positions(), {0, 0.0});
-  m.pins[1].origin = point_position(m, b.positions(), {15, 1.0});
-  build_constraint_groups(m);
-  Simulator sim(m);
   State s;
-  s.q = b.positions();
+  Simulator sim(test::hanging_yarn(p, s.q));
   s.v = Eigen::VectorXd::Zero(s.q.size());
   for (int i = 0; i < static_cast<int>(std::lround(3.0 / h)); ++i)
     EXPECT_TRUE(sim.step(s, h).ok()) << "step " << i;
