@@ -294,6 +294,10 @@ PYBIND11_MODULE(knitsim, m) {
       .def_property_readonly(
           "time_step", [](const Model& mo) { return mo.params.solver.time_step; }, "h (s).")
       .def_property_readonly(
+          "integrator",
+          [](const Model& mo) { return std::string(integrator_name(mo.params.solver.integrator)); },
+          "\"explicit\" or \"imex\" (params {\"integrator\": ...}).")
+      .def_property_readonly(
           "stitch", [](const Model& mo) { return stitch_array(mo.stitch); },
           "(num_seg, 2) int array: each segment's stitch (row, column); -1 where none.")
       .def_property_readonly(

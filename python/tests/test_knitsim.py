@@ -54,6 +54,17 @@ def test_relax_gives_a_knit_with_its_layout_and_gauge(small_knit):
     assert k.summary["status"] == "ok" and k.steps == k.summary["steps"]
 
 
+def test_the_integrator_and_step_are_parameters():
+    k = knitsim.relax("stockinette", rows=4, cols=5, max_time=0.01,
+                      params={"integrator": "imex", "time_step": 2e-4})
+    assert k.status == "ok" and k.steps == 50
+    assert k.model.integrator == "imex" and k.model.time_step == 2e-4
+    assert k.summary["params"]["solver"]["integrator"] == "imex"
+    with pytest.raises(ValueError, match="integrator"):
+        knitsim.relax("stockinette", rows=4, cols=5, max_time=0.01,
+                      params={"integrator": "implicit"})
+
+
 def test_state_arrays_are_views_of_the_state(small_knit):
     s = small_knit.state.copy()
     q = s.q
