@@ -106,6 +106,55 @@ TEST(Imex, StiffLengthEnergyIsStableWhereTheExplicitStepFails) {
   EXPECT_LT(damped.length_error, 1e-3) << "the yarn must settle at its rest length";
 }
 
+// A state at rest stays at rest: a bent, stretched yarn held in equilibrium by a constant
+// force that balances its length energy (taken implicitly) and its bending (explicit),
+// with global damping (explicit, velocity dependent). One IMEX step at any h must leave
+// q and v as they are (to rounding), as the explicit step does.
+class ConstantForce final : public Term {
+ public:
+  explicit ConstantForce(Eigen::VectorXd f) : m_f(std::move(f)) {}
+  std::string_view name() const override { return "constant"; }
+  double add_force(const Model&, const Eigen::VectorXd&, const Eigen::VectorXd&, double,
+                   Eigen::VectorXd& force) override {
+    force += m_f;
+    return 0;
+  }
+
+ private:
+  Eigen::VectorXd m_f;
+};
+
+TEST(Imex, AStateAtRestStaysAtRest) {
+  ModelBuilder b;
+  Eigen::Matrix3Xd cp(3, 15);
+  for (int k = 0; k < 15; ++k)
+    cp.col(k) = Eigen::Vector3d(0.4 * k, 0.3 * std::sin(0.5 * k), 0.1 * std::cos(0.7 * k));
+  b.add_yarn(cp);
+  Params p = Params::relaxation();
+  p.gravity = Eigen::Vector3d::Zero();
+  Model m = b.build(p, 0.9);  // rest lengths 10 % short: the length energy pulls
+  const Eigen::VectorXd q = b.positions();
+  for (const Integrator integrator : {Integrator::EXPLICIT, Integrator::IMEX}) {
+    m.params.solver.integrator = integrator;
+    std::vector<std::unique_ptr<Term>> terms = default_terms(m);
+    Eigen::VectorXd f = Eigen::VectorXd::Zero(q.size());
+    for (auto& t : terms) t->add_force(m, q, Eigen::VectorXd::Zero(q.size()), 0.0, f);
+    ASSERT_GT(f.norm(), 1.0) << "the yarn must be loaded for the test to mean anything";
+    terms.push_back(std::make_unique<ConstantForce>(-f));
+    Simulator sim(m, std::move(terms));
+    for (const double h : {1e-4, 1e-3}) {
+      State s;
+      s.q = q;
+      s.v = Eigen::VectorXd::Zero(q.size());
+      for (int i = 0; i < 10; ++i) ASSERT_TRUE(sim.step(s, h).ok());
+      EXPECT_LT((s.q - q).cwiseAbs().maxCoeff(), 1e-9)
+          << integrator_name(integrator) << " h = " << h << ": moved (cm)";
+      EXPECT_LT(s.v.cwiseAbs().maxCoeff(), 1e-6)
+          << integrator_name(integrator) << " h = " << h << ": speed (cm/s)";
+    }
+  }
+}
+
 // The undamped pendulum of Dynamics.UndampedPendulumEnergyStaysWithinBound with the IMEX
 // step: the total energy never rises above its start and the loss over 1 s stays small
 // and shrinks with h (the implicit part is first order, like the projection).

@@ -217,29 +217,33 @@ bool Simulator::imex_step(const State& s, double h, Eigen::VectorXd& q_out,
       any = true;
     }
   }
-  // explicit midpoint on the other terms
+  // the midpoint of the explicit midpoint rule, from every term's force (the implicit ones
+  // too, so that a state at rest stays at rest), where only the explicit terms are evaluated
   m_qmid = s.q + 0.5 * h * s.v;
-  m_vmid = s.v + 0.5 * h * inv_m.cwiseProduct(m_force0 - m_force_implicit);
+  m_vmid = s.v + 0.5 * h * inv_m.cwiseProduct(m_force0);
   m_force.setZero(s.q.size());
   for (auto& term : m_terms) {
     if (term->has_stiffness()) continue;
     ScopedTimer timer(m_data.stage_seconds[std::string(term->name())]);
     term->add_force(m_model, m_qmid, m_vmid, s.time + 0.5 * h, m_force);
   }
-  q_out = s.q + h * m_vmid;
-  v_out = s.v + h * inv_m.cwiseProduct(m_force);
-  if (!any) return true;
-  // linearly implicit Euler on the stiff terms: (M + h² K) Δv = h f − h² K v_e
+  // v⁺ = v + h M⁻¹ (f_E(mid) + f_I(q⁺)), f_I(q⁺) ≈ f_I(q) − K (q⁺ − q), q⁺ = q + h v⁺:
+  // (M + h² K) Δv = h (f_E(mid) + f_I(q)) − h² K v
+  if (!any) {
+    v_out = s.v + h * inv_m.cwiseProduct(m_force);
+    q_out = s.q + h * m_vmid;
+    return true;
+  }
   ScopedTimer timer(m_data.stage_seconds["implicit"]);
   if (!m_stiff.factor(m_model, m_blocks, h * h)) return false;
-  m_rhs = h * m_force_implicit;
+  m_rhs = h * (m_force + m_force_implicit);
   for (int i = 0; i < m_model.num_seg(); ++i) {
     const int base = 3 * m_model.seg_cp[i];
-    m_rhs.segment<12>(base) -= (h * h) * (m_blocks[i] * v_out.segment<12>(base));
+    m_rhs.segment<12>(base) -= (h * h) * (m_blocks[i] * s.v.segment<12>(base));
   }
   m_stiff.solve(m_rhs, m_dv);
-  v_out += m_dv;
-  q_out += h * m_dv;
+  v_out = s.v + m_dv;
+  q_out = s.q + h * v_out;
   return true;
 }
 

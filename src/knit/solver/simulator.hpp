@@ -80,10 +80,10 @@ class Simulator {
   /// Stage 1: the unconstrained explicit-midpoint step from (q, v) into (q_out, v_out).
   void unconstrained_step(const State& state, double h, Eigen::VectorXd& q_out,
                           Eigen::VectorXd& v_out);
-  /// Stage 1 of the IMEX integrator: the explicit midpoint step of every term without a
-  /// stiffness, then for those with one (K, their force f at q) the linearly implicit
-  /// Euler velocity change (M + h² K) Δv = h f − h² K v_e added to v_e (and h Δv to q_e).
-  /// Returns false when M + h² K could not be factored.
+  /// Stage 1 of the IMEX integrator: the terms without a stiffness at the explicit
+  /// midpoint (q + h/2 v, v + h/2 M⁻¹ f(q, v)), those with one (K, f_I) linearly implicit:
+  /// (M + h² K) Δv = h (f_E(mid) + f_I(q)) − h² K v, v⁺ = v + Δv, q⁺ = q + h v⁺ (a state
+  /// at rest stays at rest). Returns false when M + h² K could not be factored.
   bool imex_step(const State& state, double h, Eigen::VectorXd& q_out, Eigen::VectorXd& v_out);
   /// Stage 2: projects q (in place) at `time`, correcting v by the displacement / h.
   ProjectionResult project(Eigen::VectorXd& q, Eigen::VectorXd& v, double time, double h);
