@@ -96,7 +96,7 @@ void add_integrator_option(CLI::App* cmd, std::string& integrator) {
                   "explicit: explicit midpoint for every term (the reference); imex: the same "
                   "but the length energy taken by a linearly implicit Euler step, which lifts "
                   "the time-step limit its stiffness sets (docs/model.md §5.2)")
-      ->check(CLI::IsMember({"explicit", "imex"}));
+      ->check(CLI::IsMember(knit::integrator_names()));
 }
 
 void add_export_option(CLI::App* cmd, std::string& format) {

@@ -66,6 +66,12 @@ TEST(Cli, SimulateTakesTheIntegratorAndTimeStepAsked) {
                          temp_dir("cli_imex_bad") + " --integrator implicit");
   EXPECT_NE(bad.code, 0);
   EXPECT_NE(bad.output.find("--integrator"), std::string::npos) << bad.output;
+  const std::string bad_step_out = temp_dir("cli_imex_bad_step");
+  const Result bad_step = run(std::string("simulate ") + KNIT_EXAMPLES + "/pendulum.json --out " +
+                              bad_step_out + " --time-step 1");
+  EXPECT_NE(bad_step.code, 0);
+  EXPECT_NE(bad_step.output.find("--time-step"), std::string::npos) << bad_step.output;
+  EXPECT_FALSE(fs::exists(bad_step_out)) << "output directory created for a refused step";
 }
 
 TEST(Cli, UnstableRunStopsWithStatusAndKeepsLastGoodState) {

@@ -79,15 +79,15 @@ RigidRegionPass::RigidRegionPass(const Model& model, RegionList regions, double 
     for (int i : m_regions[r]) m_seg_regions[fill[i]++] = static_cast<int>(r);
 }
 
-// The rigid fit of a region needs only its mass moments, so each segment's samples are
-// summed once (weights m_s / r(s), r = regions of this pass holding the segment), every
-// region sums its segments' moments and shifts them to its centre (parallel-axis theorem),
-// and every sample's target mean rigid velocity is A_i + B_i × x with per-segment A, B.
 double per_step_strength(double alpha, double h) {
   if (!(h > 0) || h == FILTER_REFERENCE_STEP) return alpha;
   return 1.0 - std::pow(1.0 - alpha, h / FILTER_REFERENCE_STEP);
 }
 
+// The rigid fit of a region needs only its mass moments, so each segment's samples are
+// summed once (weights m_s / r(s), r = regions of this pass holding the segment), every
+// region sums its segments' moments and shifts them to its centre (parallel-axis theorem),
+// and every sample's target mean rigid velocity is A_i + B_i × x with per-segment A, B.
 void RigidRegionPass::velocity_change(const SampleSegments& samples, const Eigen::Matrix3Xd& x,
                                       const Eigen::Matrix3Xd& u, Eigen::Matrix3Xd& dv,
                                       double strength) const {

@@ -94,11 +94,17 @@ const char* integrator_name(Integrator integrator) {
   return integrator == Integrator::IMEX ? "imex" : "explicit";
 }
 
+const std::vector<std::string>& integrator_names() {
+  static const std::vector<std::string> names = {integrator_name(Integrator::EXPLICIT),
+                                                 integrator_name(Integrator::IMEX)};
+  return names;
+}
+
 Integrator parse_integrator(const std::string& name) {
-  if (name == "explicit") return Integrator::EXPLICIT;
-  if (name == "imex") return Integrator::IMEX;
-  throw std::invalid_argument("unknown integrator '" + name +
-                              "' (known: explicit, imex: the length energy linearly implicit)");
+  const std::vector<std::string>& names = integrator_names();
+  for (size_t k = 0; k < names.size(); ++k)
+    if (name == names[k]) return static_cast<Integrator>(k);
+  throw std::invalid_argument("expected \"explicit\" or \"imex\", got \"" + name + "\"");
 }
 
 }  // namespace knit

@@ -36,12 +36,14 @@ struct Discretisation {
 /// How a step integrates the forces before the projection and the filters:
 ///   EXPLICIT  explicit midpoint for every term (MODEL.md §5.2; the reference)
 ///   IMEX      explicit midpoint for every term but those that give a stiffness (the
-///             length energy), which take one linearly implicit Euler step instead:
-///             (M + h² K) Δv = h f(q) − h² K v. Their stiffness along the yarn bounds the
-///             explicit step (bench_step_limit); taken implicitly it no longer does.
+///             length energy), which take one linearly implicit Euler step instead
+///             (docs/model.md §5.2). Their stiffness along the yarn bounds the explicit
+///             step (bench_step_limit); taken implicitly it no longer does.
 enum class Integrator { EXPLICIT, IMEX };
 /// "explicit" or "imex".
 const char* integrator_name(Integrator integrator);
+/// Every integrator's name, in enum order.
+const std::vector<std::string>& integrator_names();
 /// The integrator named `name`; throws std::invalid_argument naming the known ones.
 Integrator parse_integrator(const std::string& name);
 

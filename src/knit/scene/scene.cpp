@@ -364,10 +364,11 @@ Params parse_params(const JsonReader& r, Params p) {
     p.solver.max_projection_iterations = r.at("max_projection_iterations").integer(1);
   if (r.has("time_step")) p.solver.time_step = r.at("time_step").positive();
   if (r.has("integrator")) {
-    const std::string name = r.at("integrator").string();
-    if (name != "explicit" && name != "imex")
-      r.at("integrator").fail("expected \"explicit\" or \"imex\", got \"" + name + "\"");
-    p.solver.integrator = parse_integrator(name);
+    try {
+      p.solver.integrator = parse_integrator(r.at("integrator").string());
+    } catch (const std::invalid_argument& e) {
+      r.at("integrator").fail(e.what());
+    }
   }
   // every field within its working range (params.hpp), named by its key
   for (const ParamRange& range : param_ranges())
