@@ -18,10 +18,10 @@
 namespace knit::bench {
 
 /// The non-empty items of a comma-separated list ("a,b,,c" → a, b, c).
-inline std::vector<std::string> split_list(const std::string& text) {
+inline std::vector<std::string> split_list(const std::string& text, char separator = ',') {
   std::vector<std::string> out;
   std::stringstream in(text);
-  for (std::string item; std::getline(in, item, ',');)
+  for (std::string item; std::getline(in, item, separator);)
     if (!item.empty()) out.push_back(item);
   return out;
 }

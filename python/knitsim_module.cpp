@@ -426,7 +426,7 @@ PYBIND11_MODULE(knitsim, m) {
       [](const std::string& pattern, std::optional<int> rows, std::optional<int> cols,
          std::optional<bool> in_the_round, double max_time, double rest, double stitch_size,
          double shrink, int segments_per_stitch, const py::object& params, const std::string& out,
-         bool overwrite, bool progress, const State* resume) {
+         bool overwrite, bool progress, const State* resume, bool fire, double residual) {
         RelaxKnitOptions o;
         if (is_knitout_path(pattern)) {
           // a knitting-machine program knits what it says: its size is the default
@@ -444,6 +444,8 @@ PYBIND11_MODULE(knitsim, m) {
         o.params = params_over(o.params, params, "relax");
         o.run.max_time = max_time;
         o.run.ke_per_length = rest;
+        o.run.force_residual = residual;
+        o.fire = fire;
         o.run.out_dir = out;
         o.run.overwrite = overwrite;
         o.run.progress = progress;
@@ -455,12 +457,14 @@ PYBIND11_MODULE(knitsim, m) {
       "pattern"_a, "rows"_a = py::none(), "cols"_a = py::none(), "in_the_round"_a = py::none(),
       "max_time"_a = 2.0, "rest"_a = 1e-5, "stitch_size"_a = 0.0, "shrink"_a = RELAX_SHRINK,
       "segments_per_stitch"_a = 8, "params"_a = py::none(), "out"_a = "", "overwrite"_a = false,
-      "progress"_a = false, "resume"_a = nullptr,
+      "progress"_a = false, "resume"_a = nullptr, "fire"_a = false, "residual"_a = 0.0,
       "Generates `pattern` (stockinette, garter, rib2x2, seed, … a chart file or a knitout "
       "program) at rows × cols (default 12 × 12, or the program's size) and relaxes it until it "
-      "rests (kinetic energy per length below `rest` erg/cm) or `max_time` s of "
-      "simulated time. `params`: a dict of scene parameters over the relaxation's. With "
-      "`out`, writes the run as `knitsim relax --out` does. Returns a Knit.");
+      "rests (kinetic energy per length below `rest` erg/cm, or with `residual` > 0 the force "
+      "residual below `residual` cm/s²) or `max_time` s of simulated time. `fire`: relax by "
+      "minimisation (FIRE; rest by the force residual, 1 cm/s² unless `residual` says). "
+      "`params`: a dict of scene parameters over the relaxation's. With `out`, writes the run "
+      "as `knitsim relax --out` does. Returns a Knit.");
 
   // ------------------------------------------------------------- files
   py::class_<StateFile>(m, "StateFile", "A .kstate file's contents.")

@@ -26,7 +26,7 @@ void register_relax(CLI::App& app) {
     double time_step = knit::relax_knit_params().solver.time_step;
     double shrink = knit::RELAX_SHRINK;
     int threads = 0;
-    bool quiet = false, no_frames = false, overwrite = false;
+    bool quiet = false, no_frames = false, overwrite = false, fire = false;
   };
   auto o = std::make_shared<Opts>();
   CLI::App* cmd =
@@ -90,6 +90,14 @@ void register_relax(CLI::App& app) {
   cmd->add_option("--ke-threshold", o->run.ke_per_length,
                   "rest when kinetic energy per yarn length falls below (erg/cm)")
       ->check(finite_positive(1e12));
+  cmd->add_option("--residual", o->run.force_residual,
+                  "rest when the net force per unit mass of a step falls below (cm/s²; g = 981): "
+                  "the force-residual test instead of --ke-threshold (default with --fire: " +
+                      knit::short_number(knit::RELAX_FIRE_RESIDUAL) + ")")
+      ->check(finite_positive(1e12));
+  cmd->add_flag("--fire", o->fire,
+                "relax by minimisation (FIRE) instead of damped dynamics: no global or non-rigid "
+                "damping, the motion steered downhill; rest by the force residual");
   cmd->add_option("--check-every", o->run.check_every, "steps between rest checks and states")
       ->check(CLI::Range(1, 1'000'000'000));
   add_threads_option(cmd, o->threads);
@@ -118,6 +126,14 @@ void register_relax(CLI::App& app) {
     }
     if (o->from.empty() == o->pattern.empty())
       throw std::invalid_argument("relax: give either a PATTERN or --from FILE");
+    if (o->fire) {
+      if (!o->from.empty())
+        throw std::invalid_argument("--fire: relaxes knit patterns only, not yarns --from a file");
+      for (const char* damping : {"--k-global", "--alpha-small", "--alpha-large"})
+        if (given(damping))
+          throw std::invalid_argument(std::string(damping) +
+                                      ": a FIRE relaxation (--fire) has no damping to set");
+    }
     if (o->resume.empty() && knit::is_knitout_path(o->pattern)) {
       // a knitting-machine program knits what it says: its size is the default
       const knit::KnitoutPiece piece = knit::load_knitout(o->pattern);
@@ -156,6 +172,7 @@ void register_relax(CLI::App& app) {
       p.solver.time_step = o->time_step;
       p.solver.integrator = knit::parse_integrator(o->integrator);
       o->knit.shrink = o->shrink;
+      o->knit.fire = o->fire;
       o->knit.run = o->run;
       knit::State resumed;
       if (!o->resume.empty()) {

@@ -65,6 +65,17 @@ def test_the_integrator_and_step_are_parameters():
                       params={"integrator": "implicit"})
 
 
+def test_fire_relaxation_rests_by_the_force_residual():
+    # FIRE: no damping, rest when the net force per unit mass is below `residual`
+    k = knitsim.relax("stockinette", rows=4, cols=4, max_time=0.06, fire=True,
+                      residual=1e9, params={"integrator": "imex", "time_step": 3e-4})
+    s = k.summary
+    assert s["method"] == "fire" and s["rest_test"] == "residual"
+    assert s["relaxed"] and s["force_residual"] < 1e9
+    assert s["k_global"] == 0.0 and "fire" in s["stage_seconds"]
+    with pytest.raises(ValueError, match="residual"):
+        knitsim.relax("stockinette", rows=4, cols=4, max_time=0.01, residual=-1.0)
+
 def test_state_arrays_are_views_of_the_state(small_knit):
     s = small_knit.state.copy()
     q = s.q

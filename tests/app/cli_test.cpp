@@ -151,6 +151,35 @@ TEST(Cli, RelaxTakesThePapersGlobalDampingWhenAsked) {
   EXPECT_NE(bad.output.find("alpha-small"), std::string::npos) << bad.output;
 }
 
+// `relax --fire` relaxes by minimisation: no damping (refused if asked), the FIRE filter,
+// rest by the force residual, which the log records at every check.
+TEST(Cli, RelaxFireRestsByTheForceResidual) {
+  const std::string out = temp_dir("cli_relax_fire");
+  const Result r =
+      run("relax stockinette --rows 3 --cols 3 --fire --integrator imex --time-step 3e-4 "
+          "--max-time 0.03 --check-every 20 --residual 1e9 --quiet --no-frames --out " +
+          out);
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("at rest"), std::string::npos) << r.output;
+  std::ifstream in(out + "/summary.json");
+  const auto s = nlohmann::json::parse(in);
+  EXPECT_EQ(s["method"], "fire");
+  EXPECT_EQ(s["rest_test"], "residual");
+  EXPECT_EQ(s["force_residual_threshold"].get<double>(), 1e9);
+  EXPECT_GT(s["force_residual"].get<double>(), 0.0);
+  std::ifstream log(out + "/log.csv");
+  std::string header;
+  std::getline(log, header);
+  EXPECT_NE(header.find(",force_residual,"), std::string::npos) << header;
+  for (const char* damping : {"--k-global 1", "--alpha-small 0.2"}) {
+    const Result bad =
+        run(std::string("relax stockinette --fire ") + damping + " --out " + out + "_bad");
+    EXPECT_NE(bad.code, 0);
+    EXPECT_NE(bad.output.find("FIRE"), std::string::npos) << bad.output;
+    EXPECT_FALSE(fs::exists(out + "_bad"));
+  }
+}
+
 // A relaxation stopped and resumed (--resume) follows the same path as one that ran on:
 // the state file holds positions, velocities and time, and the glues go on closing.
 TEST(Cli, ResumedRelaxationContinuesTheSamePath) {

@@ -98,6 +98,9 @@ struct StepData {
   ContactRecord contact;
   std::vector<ObjectRecord> objects;  ///< one per object of the model, in its order
   double max_violation = 0;           ///< max |C| over every constraint group at the state
+  /// The force residual at the state (cm/s²; Simulator::force_residual): NaN unless it
+  /// was asked for (relaxations with the force-residual rest test ask at every check).
+  double force_residual = std::numeric_limits<double>::quiet_NaN();
   // --- step records, of the step that produced it
   ProjectionRecord projection;
   std::vector<ConstraintRecord> constraints;

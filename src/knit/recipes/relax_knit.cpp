@@ -6,6 +6,7 @@
 #include <memory>
 
 #include "knit/analysis/fabric_shape.hpp"
+#include "knit/filters/fire.hpp"
 #include "knit/filters/nonrigid_damping.hpp"
 #include "knit/io/input_file.hpp"
 #include "knit/io/run_dir.hpp"
@@ -178,7 +179,9 @@ KnitRelaxation setup_knit_relaxation(const std::string& pattern_name, const Rela
   check_knitout_size(pattern_name, o.knit);
   KnitRelaxation r;
   r.knit = generate_knit(load_pattern(pattern_name), o.knit);
-  Model model = build_knit_model(r.knit, o.params, o.shrink, o.glue_close_time);
+  Params params = o.params;
+  if (o.fire) params.material.k_global = 0;
+  Model model = build_knit_model(r.knit, params, o.shrink, o.glue_close_time);
   model.knit = KnitInfo{pattern_name,
                         o.knit.rows,
                         o.knit.cols,
@@ -190,9 +193,12 @@ KnitRelaxation setup_knit_relaxation(const std::string& pattern_name, const Rela
   if (r.state.q.size() != model.num_dof() || r.state.v.size() != model.num_dof())
     throw std::invalid_argument("the state to resume from does not match the knit's size");
   r.sim = std::make_unique<Simulator>(std::move(model));
-  r.sim->add_filter(
-      std::make_unique<NonRigidDampingFilter>(r.sim->model(), o.params.material.alpha_small,
-                                              o.params.material.alpha_large, o.knit.in_the_round));
+  if (o.fire)
+    r.sim->add_filter(std::make_unique<FireFilter>());
+  else
+    r.sim->add_filter(std::make_unique<NonRigidDampingFilter>(
+        r.sim->model(), o.params.material.alpha_small, o.params.material.alpha_large,
+        o.knit.in_the_round));
   return r;
 }
 
@@ -212,14 +218,17 @@ RelaxResult relax_knit(const std::string& pattern_name, const RelaxKnitOptions& 
   }
   const FabricShape initial = measure_fabric(model, generated_state(knit).q);
 
+  RelaxOptions run = o.run;
+  if (o.fire && run.force_residual == 0) run.force_residual = RELAX_FIRE_RESIDUAL;
   nlohmann::json extra = {{"pattern", pattern_name},
+                          {"method", o.fire ? "fire" : "damped_dynamics"},
                           {"rows", o.knit.rows},
                           {"cols", o.knit.cols},
                           {"in_the_round", o.knit.in_the_round},
                           {"segments_per_stitch", o.knit.segments_per_stitch},
                           {"shrink", o.shrink},
                           {"contact_points", o.params.discretisation.contact_points},
-                          {"k_global", o.params.material.k_global},
+                          {"k_global", model.params.material.k_global},
                           {"alpha_small", o.params.material.alpha_small},
                           {"alpha_large", o.params.material.alpha_large},
                           {"generated",
@@ -229,8 +238,9 @@ RelaxResult relax_knit(const std::string& pattern_name, const RelaxKnitOptions& 
                             {"loop_length_cm", knit.loop_length_cm},
                             {"min_distance_ratio", knit.min_distance_ratio},
                             {"shape", to_json(initial)}}}};
+  if (o.fire) extra["alpha_small"] = extra["alpha_large"] = nullptr;  // no damping filter
   for (const auto& [k, v] : o.extra.items()) extra[k] = v;
-  result.report = relax(sim, result.state, o.run, extra,
+  result.report = relax(sim, result.state, run, extra,
                         [&](Simulator&, const State& st, nlohmann::json& summary) {
                           const nlohmann::json shape = to_json(measure_fabric(model, st.q));
                           for (const auto& [k, v] : shape.items()) summary[k] = v;

@@ -20,6 +20,10 @@
 
 namespace knit {
 
+/// The force-residual rest threshold of FIRE relaxations unless told otherwise (cm/s²):
+/// the net force on the yarn a thousandth of its weight.
+inline constexpr double RELAX_FIRE_RESIDUAL = 1.0;
+
 /// Seconds over which a generated knit's glued yarn ends are drawn onto the points they
 /// are glued to (they are laid a yarn diameter away).
 inline constexpr double RELAX_GLUE_CLOSE_TIME = 0.05;
@@ -40,6 +44,11 @@ struct RelaxKnitOptions {
   double shrink = RELAX_SHRINK;                    ///< rest-length factor c
   double glue_close_time = RELAX_GLUE_CLOSE_TIME;  ///< s
   Params params = relax_knit_params();
+  /// Relax by minimisation (FIRE, filters/fire.hpp) instead of damped dynamics: the FIRE
+  /// filter replaces the non-rigid damping filter, global damping is off whatever
+  /// params say, and rest is the force-residual test (run.force_residual, or
+  /// RELAX_FIRE_RESIDUAL when it is 0).
+  bool fire = false;
   RelaxOptions run;  ///< time limit, rest threshold, output directory (empty: write nothing)
   /// Go on from this state (same knit: see read_resumed_knit_state); its time carries on,
   /// so glues go on closing where they were.

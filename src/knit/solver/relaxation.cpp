@@ -14,6 +14,10 @@ void validate_relax_options(const RelaxOptions& o, double time_step) {
   if (!std::isfinite(o.ke_per_length) || !(o.ke_per_length > 0))
     throw std::invalid_argument("ke-threshold = " + short_number(o.ke_per_length) +
                                 " erg/cm: expected a finite number > 0");
+  if (!std::isfinite(o.force_residual) || o.force_residual < 0)
+    throw std::invalid_argument("residual = " + short_number(o.force_residual) +
+                                " cm/s²: expected a finite number ≥ 0 (0: the kinetic-energy "
+                                "test)");
   if (o.check_every < 1)
     throw std::invalid_argument("check-every = " + std::to_string(o.check_every) +
                                 ": expected at least 1 step");
@@ -31,11 +35,18 @@ RunReport relax(Simulator& sim, State& state, const RelaxOptions& o, nlohmann::j
   run.write_frames = o.write_frames;
   run.continue_in_place = o.continue_in_place;
   run.resume_command = o.resume_command;
+  const bool residual_test = o.force_residual > 0;
+  // every check measures the force residual (a force evaluation and two projections per
+  // check_every steps), so that the log shows how far from rest a run is by both tests
+  run.before_output = [](Simulator& s, const State& st) { s.force_residual(st); };
   run.stop_when = [&](const StepData& data, const State&) {
-    reached = data.kinetic_energy / length < o.ke_per_length;
+    reached = residual_test ? data.force_residual < o.force_residual
+                            : data.kinetic_energy / length < o.ke_per_length;
     return reached;
   };
+  extra["rest_test"] = residual_test ? "residual" : "kinetic_energy";
   extra["ke_per_length_threshold"] = o.ke_per_length;
+  if (residual_test) extra["force_residual_threshold"] = o.force_residual;
   run.extra = extra;
   run.on_finish = [&](Simulator& s, const State& st, nlohmann::json& summary) {
     summary["relaxed"] = reached;

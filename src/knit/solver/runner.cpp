@@ -56,7 +56,7 @@ std::string format_duration(double s) {
 std::string log_header(const Simulator& sim) {
   std::string h =
       "time_s,kinetic_energy,potential_energy,max_violation,contact_pairs,min_contact_distance,"
-      "wall_s_per_step";
+      "wall_s_per_step,force_residual";
   for (const auto& term : sim.terms()) h += ",energy_" + std::string(term->name());
   for (const auto& group : sim.model().constraint_groups)
     if (group->kind() != "length")
@@ -145,12 +145,16 @@ namespace {
 
 // drops the rows of an existing log.csv whose time is after `time` (a run resumed from an
 // earlier state of the same directory goes on from there)
-void truncate_log_after(const std::filesystem::path& path, double time) {
+// (returns false, touching nothing, when its header is not `expected`: an older version
+// wrote other columns)
+bool truncate_log_after(const std::filesystem::path& path, double time,
+                        const std::string& expected) {
   std::ifstream in(path);
-  if (!in) return;
+  if (!in) return false;
   std::string line, kept;
   bool header = true;
   while (std::getline(in, line)) {
+    if (header && line != expected) return false;
     if (!header) {
       const double t = std::strtod(line.c_str(), nullptr);
       if (t > time * (1 + 1e-12) + 1e-15) break;
@@ -160,6 +164,7 @@ void truncate_log_after(const std::filesystem::path& path, double time) {
   }
   in.close();
   write_file_atomic(path.string(), kept);
+  return true;
 }
 
 // bytes of one frame file for this model (positions, velocities, stitches, knit block)
@@ -275,8 +280,13 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
   // the log grows row by row so long runs can be followed (tail -f DIR/log.csv)
   std::ofstream log;
   if (write) {
+    bool appending = false;
     if (opt.continue_in_place && fs::exists(dir / "log.csv")) {
-      truncate_log_after(dir / "log.csv", state.time);
+      appending = truncate_log_after(dir / "log.csv", state.time, log_header(sim));
+      // a log of other columns (an older knitsim) is kept whole beside the new one
+      if (!appending) fs::rename(dir / "log.csv", dir / "log_before_resume.csv");
+    }
+    if (appending) {
       log.open(dir / "log.csv", std::ios::app);
     } else {
       log.open(dir / "log.csv", std::ios::trunc);
@@ -306,6 +316,7 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
   bool printed_progress = false;
 
   auto write_output = [&](bool frame) {
+    if (opt.before_output) opt.before_output(sim, state);
     const double wall = seconds_since(last_output);
     const long long dsteps = report.steps - last_output_step;
     if (write) {
@@ -315,7 +326,8 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
           << (data.contact.present && std::isfinite(data.contact.min_distance_ratio)
                   ? data.contact.min_distance_ratio
                   : -1)
-          << "," << (dsteps > 0 ? wall / dsteps : 0.0);
+          << "," << (dsteps > 0 ? wall / dsteps : 0.0) << ","
+          << (std::isfinite(data.force_residual) ? data.force_residual : -1);
       for (const TermRecord& t : data.terms) log << "," << t.energy;
       for (const auto& group : model.constraint_groups) {
         if (group->kind() == "length") continue;
@@ -464,6 +476,7 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
   s["max_length_violation"] = FastProjection::max_length_violation(model, state.q);
   s["max_constraint_violation"] = data.max_violation;
   s["kinetic_energy"] = data.kinetic_energy;
+  s["force_residual"] = finite_or_null(data.force_residual);
   s["potential_energy"] = data.potential_energy;
   nlohmann::json energies = nlohmann::json::object();
   for (const TermRecord& t : data.terms) energies[t.name] = t.energy;

@@ -5,7 +5,8 @@
 //   DIR/final.kstate                 the last state (the last good one if the run failed)
 //   DIR/log.csv                      time_s, kinetic_energy, potential_energy,
 //                                    max_violation, contact_pairs, min_contact_distance,
-//                                    wall_s_per_step, energy_<term>…, <group>_fx/fy/fz…
+//                                    wall_s_per_step, force_residual,
+//                                    energy_<term>…, <group>_fx/fy/fz…
 //                                    — one row per written state, appended as the run goes
 //   DIR/summary.json                 status, counts, energies, constraint forces, timings
 // Everything the log, summary and progress line say is read from the simulator's
@@ -35,6 +36,9 @@ struct RunOptions {
   std::string resume_command;
   bool progress = true;  ///< progress line on stderr for runs over ~2 s
   bool write_frames = true;
+  /// Optional measurement at every output step, before the log row and the state are
+  /// written, that StepData should carry into them (relaxations: the force residual).
+  std::function<void(Simulator&, const State&)> before_output;
   /// Optional early stop, checked at every output step: return true to end the run (ok).
   std::function<bool(const StepData&, const State&)> stop_when;
   /// Optional observer, called with every written state (the initial one included),

@@ -153,6 +153,7 @@ void Simulator::forward(const State& state, double known_violation) {
   m_data.objects.resize(m_model.objects.size());
   for (size_t k = 0; k < m_model.objects.size(); ++k)
     m_data.objects[k] = ObjectRecord{m_model.objects[k]->name};
+  m_data.force_residual = std::numeric_limits<double>::quiet_NaN();
   double e = 0;
   Eigen::Vector3d before = Eigen::Vector3d::Zero();
   // with the IMEX integrator the implicit terms' force at q is also kept on its own
@@ -359,6 +360,50 @@ StepResult Simulator::step(State& state, double h) {
     m_data.warnings.push_back(msg.str());
   }
   return res;
+}
+
+double Simulator::force_residual(const State& state) {
+  forward(state);
+  const int n = m_model.num_cp();
+  Eigen::VectorXd zero = Eigen::VectorXd::Zero(state.q.size()), force;
+  compute_forces(state.q, zero, state.time, force);
+  // the acceleration a = M⁻¹ f, and the largest of its control points'
+  Eigen::VectorXd a(force.size());
+  double a_max = 0;
+  for (int k = 0; k < n; ++k) {
+    a.segment<3>(3 * k) = force.segment<3>(3 * k) / m_model.mass[k];
+    a_max = std::max(a_max, a.segment<3>(3 * k).norm());
+  }
+  double residual = 0;
+  if (a_max > 0) {
+    // the projection's M⁻¹-orthogonal removal of what the constraints hold, applied to a
+    // small displacement along a: (P(q₀ + ε a) − q₀) / ε, with q₀ = P(q) and ε moving the
+    // most accelerated point by 1 % of the yarn radius (the projection's tolerance,
+    // 1e-6 cm, is then 1e-3 of it)
+    Eigen::VectorXd q0 = state.q;
+    m_projection.project(m_model, q0, state.time);
+    const double eps = 1e-2 * m_model.params.material.radius / a_max;
+    Eigen::VectorXd q1 = q0 + eps * a;
+    m_projection.project(m_model, q1, state.time);
+    // the control points around glued points are left out (see simulator.hpp)
+    std::vector<char> left_out(n, 0);
+    for (const Glue& g : m_model.glues)
+      for (const int s : {g.a.segment, g.b.segment}) {
+        const YarnInfo& y = m_model.yarns[m_model.seg_yarn[s]];
+        const int first = std::max(y.seg_begin, s - GLUE_RESIDUAL_EXCLUSION);
+        const int last = std::min(y.seg_end - 1, s + GLUE_RESIDUAL_EXCLUSION);
+        for (int k = m_model.seg_cp[first]; k <= m_model.seg_cp[last] + 3; ++k) left_out[k] = 1;
+      }
+    double mass = 0;
+    for (int k = 0; k < n; ++k) {
+      if (left_out[k]) continue;
+      residual += m_model.mass[k] * (q1.segment<3>(3 * k) - q0.segment<3>(3 * k)).squaredNorm();
+      mass += m_model.mass[k];
+    }
+    residual = mass > 0 ? std::sqrt(residual / mass) / eps : 0;
+  }
+  m_data.force_residual = residual;
+  return residual;
 }
 
 double Simulator::kinetic_energy(const State& s) const {

@@ -1,0 +1,117 @@
+// Time to rest: relaxes knitted samples from their generated yarn with each relaxation
+// method asked and reports, per run, the wall time, the simulated time, whether and by
+// which test it came to rest, the potential energy, the force residual and the rest
+// shape (lengths along the fabric, extents, edge curl), with each shape measure's
+// relative difference from the first method's run of the same pattern.
+//   bench_relax_to_rest [--patterns stockinette,garter,rib2x2] [--rows R] [--cols C]
+//                       [--methods dynamic:explicit:8.474576271186441e-05,fire:imex:3e-4]
+//                       [--max-time S] [--threads N]
+// A method is KIND:INTEGRATOR:H — KIND dynamic (damped dynamics, the kinetic-energy rest
+// test unless --residual is given) or fire (FIRE minimisation, the force-residual test),
+// INTEGRATOR explicit or imex, H the time step (s).
+#include <CLI/CLI.hpp>
+#include <iostream>
+
+#include "bench_util.hpp"
+#include "knit/recipes/relax_knit.hpp"
+
+namespace {
+
+struct Method {
+  bool fire = false;
+  knit::Integrator integrator = knit::Integrator::EXPLICIT;
+  double h = 0;
+  std::string text;
+};
+
+Method parse_method(const std::string& text) {
+  const auto parts = knit::bench::split_list(text, ':');
+  if (parts.size() != 3 || (parts[0] != "dynamic" && parts[0] != "fire"))
+    throw std::invalid_argument("'" + text +
+                                "': expected KIND:INTEGRATOR:H, KIND dynamic or fire (e.g. "
+                                "fire:imex:3e-4)");
+  return {parts[0] == "fire", knit::parse_integrator(parts[1]), std::stod(parts[2]), text};
+}
+
+constexpr const char* SHAPE_KEYS[] = {"course_length_cm", "wale_length_cm", "course_extent_cm",
+                                      "wale_extent_cm", "edge_curl"};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string patterns_text = "stockinette,garter,rib2x2";
+  std::string methods_text =
+      "dynamic:explicit:8.474576271186441e-05,dynamic:imex:3e-4,fire:imex:3e-4";
+  int rows = 12, cols = 12, threads = 0;
+  double max_time = 30, residual = 0;
+  CLI::App app{"bench_relax_to_rest: wall time to relax knitted samples to rest, by method"};
+  app.add_option("--patterns", patterns_text, "comma-separated patterns");
+  app.add_option("--rows", rows);
+  app.add_option("--cols", cols);
+  app.add_option("--methods", methods_text, "comma-separated KIND:INTEGRATOR:H");
+  app.add_option("--max-time", max_time, "simulated seconds at most per run");
+  app.add_option("--residual", residual,
+                 "force-residual rest threshold for every method (cm/s²; 0: the kinetic-energy "
+                 "test for dynamic runs, the default for fire)");
+  app.add_option("--threads", threads, "0 = all cores");
+  CLI11_PARSE(app, argc, argv);
+  const auto thread_cap = knit::bench::limit_threads(threads);
+  std::vector<Method> methods;
+  for (const std::string& t : knit::bench::split_list(methods_text))
+    methods.push_back(parse_method(t));
+
+  nlohmann::json runs = nlohmann::json::array();
+  for (const std::string& pattern : knit::bench::split_list(patterns_text)) {
+    nlohmann::json first;
+    for (const Method& m : methods) {
+      knit::RelaxKnitOptions o;  // as `knitsim relax PATTERN` runs it
+      o.knit.rows = rows;
+      o.knit.cols = cols;
+      o.fire = m.fire;
+      o.params.solver.integrator = m.integrator;
+      o.params.solver.time_step = m.h;
+      o.run.max_time = max_time;
+      o.run.force_residual = residual;
+      o.run.check_every = std::max(1, static_cast<int>(std::lround(0.015 / m.h)));
+      o.run.progress = false;  // and no out_dir: nothing written
+      const knit::RelaxResult r = knit::relax_knit(pattern, o);
+      const nlohmann::json& s = r.report.summary;
+      nlohmann::json j = {{"pattern", pattern},
+                          {"method", m.text},
+                          {"segments", r.model.num_seg()},
+                          {"status", s["status"]},
+                          {"relaxed", s["relaxed"]},
+                          {"rest_test", s["rest_test"]},
+                          {"steps", r.report.steps},
+                          {"sim_time_s", s["sim_time_s"]},
+                          {"wall_time_s", s["wall_time_s"]},
+                          {"potential_energy", s["potential_energy"]},
+                          {"ke_per_length", s["ke_per_length"]},
+                          {"force_residual", s["force_residual"]},
+                          {"stage_seconds", s["stage_seconds"]}};
+      for (const char* key : SHAPE_KEYS) j[key] = s.value(key, nlohmann::json());
+      if (first.is_null()) {
+        first = j;
+      } else {
+        nlohmann::json diff = nlohmann::json::object();
+        for (const char* key : SHAPE_KEYS)
+          if (j[key].is_number() && first[key].is_number() && first[key].get<double>() != 0)
+            diff[key] = j[key].get<double>() / first[key].get<double>() - 1;
+        j["relative_difference_from_first"] = diff;
+      }
+      std::cerr << "relax_to_rest: " << pattern << " " << m.text << ": " << j["wall_time_s"]
+                << " s wall, " << j["sim_time_s"] << " s simulated, "
+                << (j["relaxed"].get<bool>() ? "at rest" : "not at rest") << ", PE "
+                << j["potential_energy"] << " erg\n";
+      runs.push_back(j);
+    }
+  }
+  nlohmann::json out = {{"benchmark", "relax_to_rest"},
+                        {"rows", rows},
+                        {"cols", cols},
+                        {"max_time_s", max_time},
+                        {"threads", knit::bench::active_threads()},
+                        {"machine", knit::bench::machine_info()},
+                        {"runs", runs}};
+  std::cout << out.dump(2) << "\n";
+}
