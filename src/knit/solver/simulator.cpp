@@ -243,9 +243,64 @@ bool Simulator::imex_step(const State& s, double h, Eigen::VectorXd& q_out,
     m_rhs.segment<12>(base) -= (h * h) * (m_blocks[i] * s.v.segment<12>(base));
   }
   m_stiff.solve(m_rhs, m_dv);
+  hold_glues_in_solve(s, h, m_dv);
   v_out = s.v + m_dv;
   q_out = s.q + h * v_out;
   return true;
+}
+
+void Simulator::hold_glues_in_solve(const State& s, double h, Eigen::VectorXd& dv) {
+  if (!m_glue_rows_built) {
+    m_glue_rows_built = true;
+    for (const auto& group : m_model.constraint_groups) {
+      if (group->kind() != "glue") continue;
+      std::vector<Eigen::Triplet<double>> entries;
+      group->jacobian_structure(m_model, entries);
+      const size_t first = m_glue_rows.size();
+      m_glue_rows.resize(first + group->rows());
+      // duplicate entries (control points shared by both glued points) are summed
+      for (const auto& e : entries) {
+        auto& row = m_glue_rows[first + e.row()];
+        auto it =
+            std::find_if(row.begin(), row.end(), [&](const auto& p) { return p.first == e.col(); });
+        if (it == row.end())
+          row.emplace_back(e.col(), e.value());
+        else
+          it->second += e.value();
+      }
+    }
+  }
+  const int m = static_cast<int>(m_glue_rows.size());
+  if (m == 0) return;
+  // Y = (M + h² K)⁻¹ Jᵀ, S = J Y; J (v + Δv₀ − Y μ) = −C(q, t + h) / h
+  const int n = static_cast<int>(dv.size());
+  m_glue_y.resize(n, m);
+  Eigen::VectorXd column = Eigen::VectorXd::Zero(n), y;
+  for (int r = 0; r < m; ++r) {
+    for (const auto& [dof, value] : m_glue_rows[r]) column[dof] = value;
+    m_stiff.solve(column, y);
+    m_glue_y.col(r) = y;
+    for (const auto& [dof, value] : m_glue_rows[r]) column[dof] = 0;
+  }
+  Eigen::MatrixXd S(m, m);
+  Eigen::VectorXd rhs(m), c(m);
+  int row = 0;
+  for (const auto& group : m_model.constraint_groups) {
+    if (group->kind() != "glue") continue;
+    group->evaluate(m_model, s.q, s.time + h, c.data() + row, nullptr);
+    row += group->rows();
+  }
+  for (int r = 0; r < m; ++r) {
+    double jv = 0;
+    for (const auto& [dof, value] : m_glue_rows[r]) jv += value * (s.v[dof] + dv[dof]);
+    rhs[r] = jv + c[r] / h;
+    for (int k = 0; k < m; ++k) {
+      double sum = 0;
+      for (const auto& [dof, value] : m_glue_rows[r]) sum += value * m_glue_y(dof, k);
+      S(r, k) = sum;
+    }
+  }
+  dv -= m_glue_y * S.ldlt().solve(rhs);
 }
 
 ProjectionResult Simulator::project(Eigen::VectorXd& q, Eigen::VectorXd& v, double time, double h) {
@@ -385,18 +440,8 @@ double Simulator::force_residual(const State& state) {
     const double eps = 1e-2 * m_model.params.material.radius / a_max;
     Eigen::VectorXd q1 = q0 + eps * a;
     m_projection.project(m_model, q1, state.time);
-    // the control points around glued points are left out (see simulator.hpp)
-    std::vector<char> left_out(n, 0);
-    for (const Glue& g : m_model.glues)
-      for (const int s : {g.a.segment, g.b.segment}) {
-        const YarnInfo& y = m_model.yarns[m_model.seg_yarn[s]];
-        const int first = std::max(y.seg_begin, s - GLUE_RESIDUAL_EXCLUSION);
-        const int last = std::min(y.seg_end - 1, s + GLUE_RESIDUAL_EXCLUSION);
-        for (int k = m_model.seg_cp[first]; k <= m_model.seg_cp[last] + 3; ++k) left_out[k] = 1;
-      }
     double mass = 0;
     for (int k = 0; k < n; ++k) {
-      if (left_out[k]) continue;
       residual += m_model.mass[k] * (q1.segment<3>(3 * k) - q0.segment<3>(3 * k)).squaredNorm();
       mass += m_model.mass[k];
     }

@@ -83,7 +83,12 @@ class Simulator {
   /// Stage 1 of the IMEX integrator: the terms without a stiffness at the explicit
   /// midpoint (q + h/2 v, v + h/2 M⁻¹ f(q, v)), those with one (K, f_I) linearly implicit:
   /// (M + h² K) Δv = h (f_E(mid) + f_I(q)) − h² K v, v⁺ = v + Δv, q⁺ = q + h v⁺ (a state
-  /// at rest stays at rest). Returns false when M + h² K could not be factored.
+  /// at rest stays at rest). Glues (few rows, constant ∇C = J) enter the solve as
+  /// constraints on the new velocity, J v⁺ = −C(q, t + h) / h, with multipliers μ:
+  /// (M + h² K) Δv + Jᵀ μ = b. Without them the solve (which sees K but not the glue) and
+  /// the projection after it (which sees the glue but not K, in the metric M) would come
+  /// to rest where they balance, not where the forces do: up to 10⁵ cm/s² of net force
+  /// left on a glued yarn end. Returns false when M + h² K could not be factored.
   bool imex_step(const State& state, double h, Eigen::VectorXd& q_out, Eigen::VectorXd& v_out);
   /// Stage 2: projects q (in place) at `time`, correcting v by the displacement / h.
   ProjectionResult project(Eigen::VectorXd& q, Eigen::VectorXd& v, double time, double h);
@@ -101,15 +106,6 @@ class Simulator {
   /// saddle) of the potential energy, however the yarn got there; compare it with
   /// g = 981 cm/s². Records it in data().force_residual (after a forward at the state).
   /// Costs a force evaluation and two projections.
-  ///
-  /// The control points within GLUE_RESIDUAL_EXCLUSION segments of a glued point are
-  /// left out: the IMEX step (which sees the length stiffness but not the glue) followed
-  /// by the projection (which sees the glue but not the stiffness) comes to rest where
-  /// the two balance in different metrics, with a net force of up to 10⁵ cm/s² left on a
-  /// glued yarn end's light control points. Measured on a relaxed 12×12 stockinette:
-  /// 370–415 cm/s² over all control points, 1.1–1.3 over the rest, and the explicit step
-  /// from that state brings all of them to 5 while the fabric's lengths, extents and
-  /// edge curl change by less than 0.2 %.
   double force_residual(const State& state);
   /// ½ vᵀ M v (erg) with the lumped mass.
   double kinetic_energy(const State& state) const;
@@ -141,11 +137,12 @@ class Simulator {
   std::vector<Matrix12d> m_blocks, m_term_blocks;
   Eigen::VectorXd m_force_implicit, m_force_term, m_rhs, m_dv;
   StiffSolver m_stiff;
+  // the glues' rows in the IMEX solve: ∇C as sparse rows (dof, value), built once
+  void hold_glues_in_solve(const State& state, double h, Eigen::VectorXd& dv);
+  bool m_glue_rows_built = false;
+  std::vector<std::vector<std::pair<int, double>>> m_glue_rows;
+  Eigen::MatrixXd m_glue_y;  // (M + h² K)⁻¹ ∇Cᵀ
 };
-
-/// Segments on each side of a glued point whose control points the force residual leaves
-/// out (Simulator::force_residual).
-inline constexpr int GLUE_RESIDUAL_EXCLUSION = 3;
 
 /// The default terms for a model's parameters (see Simulator(Model)).
 std::vector<std::unique_ptr<Term>> default_terms(const Model& model);
