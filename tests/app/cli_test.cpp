@@ -2,11 +2,14 @@
 // a scene is rejected.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
 
 #include "knit/io/state_file.hpp"
 #include "knit/solver/relaxation.hpp"
@@ -211,6 +214,41 @@ TEST(Cli, ResumedRelaxationContinuesTheSamePath) {
   EXPECT_EQ(round.code, 1);
   EXPECT_NE(round.output.find("knitted flat"), std::string::npos) << round.output;
   EXPECT_FALSE(fs::exists(dir + "/y"));
+}
+
+// A run resumed in its own directory appends to its log.csv; a log with other columns
+// (written by an older knitsim) is kept whole beside it, never mixed into it.
+TEST(Cli, ResumingInPlaceKeepsALogOfOtherColumnsAside) {
+  const std::string dir = temp_dir("cli_resume_log");
+  const std::string opts = " --rows 3 --cols 3 --quiet --check-every 20 --threads 1";
+  ASSERT_EQ(run("relax garter" + opts + " --max-time 0.005 --out " + dir).code, 0);
+  auto lines = [](const std::string& path) {
+    std::ifstream in(path);
+    std::vector<std::string> out;
+    for (std::string line; std::getline(in, line);) out.push_back(line);
+    return out;
+  };
+  std::vector<std::string> old = lines(dir + "/log.csv");
+  ASSERT_GT(old.size(), 1u);
+  const std::string header = old[0];
+  const size_t col = header.find(",force_residual");
+  ASSERT_NE(col, std::string::npos) << header;
+  old[0] = header.substr(0, col) + header.substr(col + std::string(",force_residual").size());
+  {
+    std::ofstream out(dir + "/log.csv");
+    for (const std::string& line : old) out << line << "\n";
+  }
+  const Result r =
+      run("relax" + opts + " --max-time 0.005 --resume " + dir + "/final.kstate --out " + dir);
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_EQ(lines(dir + "/log_before_resume.csv"), old);
+  const std::vector<std::string> now = lines(dir + "/log.csv");
+  ASSERT_GT(now.size(), 1u);
+  EXPECT_EQ(now[0], header);
+  const auto fields = [](const std::string& line) {
+    return std::count(line.begin(), line.end(), ',');
+  };
+  for (const std::string& line : now) EXPECT_EQ(fields(line), fields(header)) << line;
 }
 
 TEST(Cli, RelaxRejectsUnknownPatternAndWritesNothing) {
