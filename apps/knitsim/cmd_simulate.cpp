@@ -19,6 +19,7 @@ void register_simulate(CLI::App& app) {
     bool quiet = false, overwrite = false;
     std::string export_format, integrator;
     double time_step = 0;
+    int output_every = 0;
   };
   auto opts = std::make_shared<Opts>();
   CLI::App* cmd = app.add_subcommand("simulate", "run a scene file (JSON) and write its states");
@@ -40,6 +41,9 @@ void register_simulate(CLI::App& app) {
   cmd->add_option("--time-step", opts->time_step, "override the scene's time step (s)")
       ->check(finite_range(knit::param_range("time_step").min, knit::param_range("time_step").max));
   add_integrator_option(cmd, opts->integrator);
+  cmd->add_option("--output-every", opts->output_every,
+                  "override the scene's steps between written states and log rows")
+      ->check(CLI::Range(1, 1'000'000'000));
   cmd->add_flag("--quiet,-q", opts->quiet, "no progress line");
   add_export_option(cmd, opts->export_format);
   cmd->callback([opts, cmd]() {
@@ -49,6 +53,7 @@ void register_simulate(CLI::App& app) {
     if (cmd->count("--time-step")) scene.model.params.solver.time_step = opts->time_step;
     if (cmd->count("--integrator"))
       scene.model.params.solver.integrator = knit::parse_integrator(opts->integrator);
+    if (cmd->count("--output-every")) scene.output_every = opts->output_every;
     if (cmd->count("--duration")) {
       knit::check_duration(opts->duration, scene.model.params.solver.time_step);
       scene.duration = opts->duration;

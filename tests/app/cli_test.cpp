@@ -55,15 +55,21 @@ TEST(Cli, PendulumExampleRunsAndSummarises) {
 
 // --integrator and --time-step override the scene's: the summary records what ran, and an
 // integrator that does not exist is refused by name.
-TEST(Cli, SimulateTakesTheIntegratorAndTimeStepAsked) {
+TEST(Cli, SimulateTakesTheIntegratorTimeStepAndOutputIntervalAsked) {
   const std::string out = temp_dir("cli_imex");
   const Result r = run(std::string("simulate ") + KNIT_EXAMPLES + "/pendulum.json --out " + out +
-                       " --duration 0.05 --time-step 2e-4 --integrator imex --quiet");
+                       " --duration 0.05 --time-step 2e-4 --integrator imex --output-every 60 "
+                       "--quiet");
   ASSERT_EQ(r.code, 0) << r.output;
   std::ifstream in(out + "/summary.json");
   const auto s = nlohmann::json::parse(in);
   EXPECT_EQ(s["params"]["solver"]["integrator"], "imex");
   EXPECT_EQ(s["steps"], 250);
+  // --output-every: the initial state, steps 60, 120, 180, 240, and the last
+  std::ifstream log(out + "/log.csv");
+  int rows = -1;  // the header
+  for (std::string line; std::getline(log, line);) ++rows;
+  EXPECT_EQ(rows, 6);
   EXPECT_GT(s["stage_seconds"].value("implicit", 0.0), 0.0) << "the implicit stage never ran";
   const Result bad = run(std::string("simulate ") + KNIT_EXAMPLES + "/pendulum.json --out " +
                          temp_dir("cli_imex_bad") + " --integrator implicit");
