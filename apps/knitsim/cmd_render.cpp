@@ -1,8 +1,9 @@
 // knitsim render STATE|DIR --out FILE.png|DIR [--size WxH] [--view front|back|side|iso]
-//                [--color-rows] [--spp N]
+//                [--color-rows] [--spp N] [--box X0,Y0,Z0,X1,Y1,Z1]
 // knitsim render --compare A B C --out F.png [--labels a,b,c]
 #include <cctype>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -29,6 +30,7 @@ struct RenderArgs {
   int spp = 4, shadow_rays = 4, ao_rays = 4;
   double fps = 0;  // real time
   bool no_scale_bar = false;
+  std::vector<double> box;  // x0,y0,z0,x1,y1,z1 (cm): a close-up; empty: the whole knit
 };
 
 knit::RenderOptions options_from(const RenderArgs& a) {
@@ -47,6 +49,17 @@ knit::RenderOptions options_from(const RenderArgs& a) {
   o.shadow_rays = a.shadow_rays;
   o.ao_rays = a.ao_rays;
   o.scale_bar = !a.no_scale_bar;
+  if (!a.box.empty()) {
+    const char* axis = "xyz";
+    for (int k = 0; k < 3; ++k)
+      if (!std::isfinite(a.box[k]) || !std::isfinite(a.box[k + 3]) || a.box[k] >= a.box[k + 3])
+        throw std::runtime_error(std::string("--box: its ") + axis[k] + " range " +
+                                 std::to_string(a.box[k]) + " to " + std::to_string(a.box[k + 3]) +
+                                 " is empty; give X0,Y0,Z0,X1,Y1,Z1 (cm) with each lower corner "
+                                 "below the upper one");
+    o.frame = Eigen::AlignedBox3d(Eigen::Vector3d(a.box[0], a.box[1], a.box[2]),
+                                  Eigen::Vector3d(a.box[3], a.box[4], a.box[5]));
+  }
   return o;
 }
 
@@ -150,6 +163,10 @@ void run_render(const RenderArgs& a) {
 void render_any(const RenderArgs& a, const knit::RenderOptions& o) {
   if (!a.compare.empty()) {
     if (!a.input.empty()) throw std::runtime_error("give either a state or --compare, not both");
+    if (!a.box.empty())
+      throw std::runtime_error(
+          "--box: a comparison frames each panel on its own state; "
+          "render each state with --box instead");
     render_compare(a, o);
     return;
   }
@@ -205,6 +222,12 @@ void register_render(CLI::App& app) {
       ->check(CLI::ExistingFile);
   sub->add_flag("--no-objects", a->no_objects, "draw the yarn alone");
   sub->add_flag("--no-scale-bar", a->no_scale_bar, "no scale bar (cm) in the corner");
+  sub->add_option("--box", a->box,
+                  "X0,Y0,Z0,X1,Y1,Z1: frame this box (cm, world axes) instead of the whole knit "
+                  "and its objects, for a close-up (yarn outside it may be cut by the image's "
+                  "edge); a sequence keeps it for every frame")
+      ->expected(6)
+      ->delimiter(',');
   sub->add_option("--fps", a->fps,
                   "frame rate of the movie made from a sequence (default: the simulation's "
                   "real time, at most 60 frames per second)")
