@@ -10,7 +10,8 @@
 #               incline (examples/scarf_on_incline.json, 3 s), render it
 #   leg-warmer  relax a 44×96 2×2-rib tube knit in the round (2 s), pull it over a foot
 #               (examples/leg_warmer.json, 3 s), render it; leg-warmer-mesh: the same
-#               with the foot as an OBJ mesh (examples/leg_warmer_mesh.json)
+#               with the foot as an OBJ mesh (examples/leg_warmer_mesh.json; hands 1 cm
+#               further apart, IMEX step)
 # Outputs in out/scenes/<name>_relax and out/scenes/<name>, movie in
 # out/scenes/<name>/movie/animation.mp4.
 set -euo pipefail
