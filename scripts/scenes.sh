@@ -51,9 +51,9 @@ if [ ! -f "$relax_dir/relaxed.kstate" ]; then
   if [ -n "$frame" ]; then
     left=$(awk -v t="$(last_time "$relax_dir")" -v T=$relax_time 'BEGIN { l = T - t; print (l > 1e-6 ? l : 1e-6) }')
     echo "scenes: relaxation goes on from $frame ($left s left)"
-    $k relax --resume "$frame" --max-time "$left" ${relax_args[@]+"${relax_args[@]}"} -j "$threads" -q --out "$relax_dir"
+    $k relax --resume "$frame" --max-time "$left" "${relax_args[@]}" -j "$threads" -q --out "$relax_dir"
   else
-    $k relax "${knit_args[@]}" --max-time "$relax_time" ${relax_args[@]+"${relax_args[@]}"} -j "$threads" -q \
+    $k relax "${knit_args[@]}" --max-time "$relax_time" "${relax_args[@]}" -j "$threads" -q \
       --overwrite --out "$relax_dir"
   fi
 fi
