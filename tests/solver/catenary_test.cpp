@@ -7,7 +7,9 @@
 // the support forces by far less than the 2 % allowed. (With the simulation preset's
 // k_bend = 5 the layer is 0.3 cm.) The forces are the pins' constraint records — what the
 // supports exert, as a stretch test reads its clamps — averaged over the last 0.1 s.
-// Measured: H and V within 0.4 % of the catenary's on both sags.
+// Measured: H and V within 0.4 % of the catenary's on both sags. The static reactions at
+// the last state (StepData::static_constraints, what a quasi-static stretch test reads:
+// no inertia, no damping) match them as well.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -28,7 +30,9 @@ double catenary_parameter(double span, double length) {
 }
 
 struct Support {
-  Eigen::Vector3d left, right;  // mean force each pin exerts on the yarn (dyn)
+  Eigen::Vector3d left, right;                // mean force each pin exerts on the yarn (dyn)
+  Eigen::Vector3d static_left, static_right;  // the pins' static reactions at the end (dyn)
+  double residual = 0;                        // the force residual there (cm/s²)
   double span = 0, length = 0, weight = 0;
 };
 
@@ -76,6 +80,9 @@ Support hang_catenary(double sag_parameter) {
       out.right += sim.data().constraint("pin1")->force / tail;
     }
   }
+  out.residual = sim.force_residual(s);
+  out.static_left = sim.data().static_constraint("pin0")->force;
+  out.static_right = sim.data().static_constraint("pin1")->force;
   return out;
 }
 
@@ -97,6 +104,12 @@ TEST(Catenary, SupportForcesMatchTheCatenary) {
     EXPECT_NEAR(r.left.z(), V, 0.02 * V);
     EXPECT_NEAR(r.right.z(), V, 0.02 * V);
     EXPECT_LT(std::abs(r.left.y()) + std::abs(r.right.y()), 1e-6 * V);
+    // at rest (the residual a small part of g), the static reactions carry the same loads
+    EXPECT_LT(r.residual, 0.05 * g);
+    EXPECT_NEAR(-r.static_left.x(), H, 0.02 * H);
+    EXPECT_NEAR(r.static_right.x(), H, 0.02 * H);
+    EXPECT_NEAR(r.static_left.z(), V, 0.02 * V);
+    EXPECT_NEAR(r.static_right.z(), V, 0.02 * V);
   }
 }
 

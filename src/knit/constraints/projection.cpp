@@ -221,7 +221,8 @@ double FastProjection::max_length_violation(const Model& model, const Eigen::Vec
   return worst;
 }
 
-ProjectionResult FastProjection::project(const Model& model, Eigen::VectorXd& q, double time) {
+ProjectionResult FastProjection::project(const Model& model, Eigen::VectorXd& q, double time,
+                                         bool at_least_once) {
   ProjectionResult res;
   m_lambda.setZero(m_rows);
   if (m_rows == 0) return res;
@@ -229,7 +230,7 @@ ProjectionResult FastProjection::project(const Model& model, Eigen::VectorXd& q,
   // C and G at the current q in one pass; the last pass's G goes unused
   evaluate_impl(model, q, time, m_c, true);
   res.max_violation = max_abs(m_c);
-  while (res.max_violation > tol) {
+  while (res.max_violation > tol || (at_least_once && res.iterations == 0)) {
     if (res.iterations >= model.params.solver.max_projection_iterations ||
         !std::isfinite(res.max_violation)) {
       res.converged = false;

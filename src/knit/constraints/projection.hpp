@@ -37,8 +37,11 @@ class FastProjection {
   /// max |C(q)|.
   double max_violation(const Model& model, const Eigen::VectorXd& q, double time);
   /// Projects q in place; the result says whether max |C| reached the tolerance. The
-  /// multipliers Λ (summed over the iterations) are kept for record_groups().
-  ProjectionResult project(const Model& model, Eigen::VectorXd& q, double time);
+  /// multipliers Λ (summed over the iterations) are kept for record_groups(). With
+  /// `at_least_once` it solves for Λ once even when max |C| is already within the
+  /// tolerance (a static reaction from a displacement smaller than the tolerance).
+  ProjectionResult project(const Model& model, Eigen::VectorXd& q, double time,
+                           bool at_least_once = false);
   /// One record per constraint group of the last project(): Λ, max |C| after it, and the
   /// force and torque −∇Cᵀ Λ / h² the group exerted over a step of h seconds, with ∇C as
   /// last evaluated and torques about the group's point at (q, time).

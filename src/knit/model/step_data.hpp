@@ -101,6 +101,12 @@ struct StepData {
   /// The force residual at the state (cm/s²; Simulator::force_residual): NaN unless it
   /// was asked for (relaxations with the force-residual rest test ask at every check).
   double force_residual = std::numeric_limits<double>::quiet_NaN();
+  /// With the force residual: what each constraint group must exert to hold the state
+  /// at rest (dyn; the static reactions, −∇Cᵀ Λ for the force the terms exert along the
+  /// constraints' normals at v = 0). Empty unless the residual was asked for. At an
+  /// equilibrium they are the clamps' and pins' loads, free of the damping and inertia
+  /// that the step's records (`constraints`) carry.
+  std::vector<ConstraintRecord> static_constraints;
   // --- step records, of the step that produced it
   ProjectionRecord projection;
   std::vector<ConstraintRecord> constraints;
@@ -127,6 +133,12 @@ struct StepData {
   /// The record of a constraint group, or nullptr.
   const ConstraintRecord* constraint(const std::string& name) const {
     for (const ConstraintRecord& c : constraints)
+      if (c.name == name) return &c;
+    return nullptr;
+  }
+  /// The static reaction of a constraint group (see static_constraints), or nullptr.
+  const ConstraintRecord* static_constraint(const std::string& name) const {
+    for (const ConstraintRecord& c : static_constraints)
       if (c.name == name) return &c;
     return nullptr;
   }

@@ -7,15 +7,21 @@
 
 namespace knit {
 
-std::unique_ptr<Simulator> make_scene_simulator(const Scene& scene) {
-  auto sim = std::make_unique<Simulator>(scene.model);
+std::vector<std::unique_ptr<VelocityFilter>> scene_filters(const Scene& scene, const Model& model) {
+  std::vector<std::unique_ptr<VelocityFilter>> filters;
   const Material& m = scene.model.params.material;
   for (const SceneKnit& k : scene.knits)
-    sim->add_filter(std::make_unique<NonRigidDampingFilter>(sim->model(), m.alpha_small,
-                                                            m.alpha_large, k.in_the_round));
+    filters.push_back(std::make_unique<NonRigidDampingFilter>(model, m.alpha_small, m.alpha_large,
+                                                              k.in_the_round));
   if (std::any_of(scene.model.objects.begin(), scene.model.objects.end(),
                   [](const auto& o) { return o->filter; }))
-    sim->add_filter(std::make_unique<CollisionFilter>(sim->model()));
+    filters.push_back(std::make_unique<CollisionFilter>(model));
+  return filters;
+}
+
+std::unique_ptr<Simulator> make_scene_simulator(const Scene& scene) {
+  auto sim = std::make_unique<Simulator>(scene.model);
+  for (auto& f : scene_filters(scene, sim->model())) sim->add_filter(std::move(f));
   return sim;
 }
 

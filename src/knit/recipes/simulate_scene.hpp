@@ -7,6 +7,7 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "knit/scene/scene.hpp"
 #include "knit/solver/runner.hpp"
@@ -15,6 +16,9 @@ namespace knit {
 
 /// The simulator for a scene (see above), ready to step scene.state.
 std::unique_ptr<Simulator> make_scene_simulator(const Scene& scene);
+/// The velocity filters make_scene_simulator adds, in order, for a simulator whose model
+/// is `model` (the simulator's own copy of scene.model: the filters keep a reference).
+std::vector<std::unique_ptr<VelocityFilter>> scene_filters(const Scene& scene, const Model& model);
 
 struct SimulateOptions {
   std::string out_dir;     ///< empty: write nothing

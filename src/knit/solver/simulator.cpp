@@ -154,6 +154,7 @@ void Simulator::forward(const State& state, double known_violation) {
   for (size_t k = 0; k < m_model.objects.size(); ++k)
     m_data.objects[k] = ObjectRecord{m_model.objects[k]->name};
   m_data.force_residual = std::numeric_limits<double>::quiet_NaN();
+  m_data.static_constraints.clear();
   double e = 0;
   Eigen::Vector3d before = Eigen::Vector3d::Zero();
   // with the IMEX integrator the implicit terms' force at q is also kept on its own
@@ -419,6 +420,7 @@ StepResult Simulator::step(State& state, double h) {
 
 double Simulator::force_residual(const State& state) {
   forward(state);
+  m_data.static_constraints.clear();
   const int n = m_model.num_cp();
   Eigen::VectorXd zero = Eigen::VectorXd::Zero(state.q.size()), force;
   compute_forces(state.q, zero, state.time, force);
@@ -439,7 +441,10 @@ double Simulator::force_residual(const State& state) {
     m_projection.project(m_model, q0, state.time);
     const double eps = 1e-2 * m_model.params.material.radius / a_max;
     Eigen::VectorXd q1 = q0 + eps * a;
-    m_projection.project(m_model, q1, state.time);
+    m_projection.project(m_model, q1, state.time, /*at_least_once=*/true);
+    // its multipliers are the static reactions: a displacement ε M⁻¹ f is a step of
+    // h = √ε from rest, whose constraint force −∇Cᵀ Λ / h² is then −(f along the normals)
+    m_projection.record_groups(m_model, q1, state.time, std::sqrt(eps), m_data.static_constraints);
     double mass = 0;
     for (int k = 0; k < n; ++k) {
       residual += m_model.mass[k] * (q1.segment<3>(3 * k) - q0.segment<3>(3 * k)).squaredNorm();

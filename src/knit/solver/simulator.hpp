@@ -104,7 +104,8 @@ class Simulator {
   /// the constraint normals removed by the projection's mass-weighted metric, its
   /// mass-weighted RMS over control points. 0 exactly at a constrained minimum (or
   /// saddle) of the potential energy, however the yarn got there; compare it with
-  /// g = 981 cm/s². Records it in data().force_residual (after a forward at the state).
+  /// g = 981 cm/s². Records it in data().force_residual (after a forward at the state),
+  /// and the constraint groups' static reactions in data().static_constraints.
   /// Costs a force evaluation and two projections.
   double force_residual(const State& state);
   /// ½ vᵀ M v (erg) with the lumped mass.
