@@ -526,9 +526,12 @@ PYBIND11_MODULE(knitsim, m) {
   m.def(
       "stretch",
       [](const std::string& kstate, const std::string& direction, double to, double speed,
-         int cycles, int clamp_stitches, double output_strain, const std::string& out,
-         bool overwrite, bool render, bool progress) {
+         int cycles, int clamp_stitches, double output_strain, double hold, double hold_time,
+         bool hold_damped, const std::string& out, bool overwrite, bool render, bool progress) {
         StretchOptions o;
+        o.hold_strain = hold;
+        o.hold_time = hold_time;
+        o.hold_damped = hold_damped;
         o.direction = parse_stretch_direction(direction);
         o.to_strain = to;
         o.speed = speed;
@@ -555,7 +558,11 @@ PYBIND11_MODULE(knitsim, m) {
                        "potential_energy"_a = column(&StretchSample::potential_energy),
                        "kinetic_energy"_a = column(&StretchSample::kinetic_energy),
                        "min_contact_distance"_a = column(&StretchSample::min_contact_distance),
-                       "edge_curl"_a = column(&StretchSample::edge_curl));
+                       "edge_curl"_a = column(&StretchSample::edge_curl),
+                       "force_residual"_a = column(&StretchSample::force_residual));
+        py::array_t<bool> equilibrium(n);
+        for (py::ssize_t k = 0; k < n; ++k) equilibrium.mutable_at(k) = r.curve[k].equilibrium;
+        curve["equilibrium"] = equilibrium;
         py::dict result = report_dict(r.report);
         result["curve"] = curve;
         result["initial_separation"] = r.initial_separation;
@@ -564,9 +571,14 @@ PYBIND11_MODULE(knitsim, m) {
         return result;
       },
       "kstate"_a, "direction"_a = "course", "to"_a = 1.0, "speed"_a = 5.0, "cycles"_a = 0,
-      "clamp_stitches"_a = 2, "output_strain"_a = 0.01, "out"_a = "", "overwrite"_a = false,
-      "render"_a = false, "progress"_a = false,
+      "clamp_stitches"_a = 2, "output_strain"_a = 0.01, "hold"_a = 0.0, "hold_time"_a = 0.3,
+      "hold_damped"_a = false, "out"_a = "", "overwrite"_a = false, "render"_a = false,
+      "progress"_a = false,
       "Stretch test of a relaxed knit (.kstate) along the course, wale or bias, as `knitsim "
       "stretch --from`: returns the report with `curve` (strain, clamp forces in dyn, width "
-      "in cm, … as numpy arrays), the initial clamp separation (cm) and the speed as run.");
+      "in cm, … as numpy arrays), the initial clamp separation (cm) and the speed as run. "
+      "`hold` > 0: pull in steps of that strain and hold the clamps still for `hold_time` s "
+      "after each (FIRE, or the simulation's damping with `hold_damped`); the samples with "
+      "`equilibrium` true are the holds' ends, their forces the clamps' static reactions "
+      "and `force_residual` (cm/s²) how far from rest each is.");
 }

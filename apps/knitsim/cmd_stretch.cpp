@@ -24,7 +24,8 @@ namespace knitsim {
 void register_stretch(CLI::App& app) {
   struct Opts {
     std::vector<std::string> inputs;
-    std::string from, out, plot, direction = "course";
+    std::string from, out, plot, direction = "course", integrator;
+    double time_step = 0;
     knit::StretchOptions stretch;
     knit::SheetStretchOptions sheet;
     bool use_sheet = false;
@@ -51,6 +52,18 @@ void register_stretch(CLI::App& app) {
   cmd->add_option("--to", o->stretch.to_strain, "nominal strain to pull to (1 = doubled length)");
   cmd->add_option("--cycles", o->stretch.cycles, "further half-cycles: back, out, …");
   cmd->add_option("--speed", o->stretch.speed, "speed of the moving clamp (cm/s)");
+  cmd->add_option("--hold", o->stretch.hold_strain,
+                  "pull in steps of this much strain, holding the clamps still after each "
+                  "(and at strain 0 first) while FIRE relaxes the yarn toward rest; the curve "
+                  "is the clamps' static reactions at the ends of the holds");
+  cmd->add_option("--hold-time", o->stretch.hold_time,
+                  "with --hold: seconds of simulated time each hold lasts (default 0.3)");
+  cmd->add_flag("--hold-damped", o->stretch.hold_damped,
+                "with --hold: hold with the simulation's damping instead of FIRE (a "
+                "stress-relaxation test)");
+  cmd->add_option("--time-step", o->time_step, "time step of the yarn model (s)")
+      ->check(finite_range(knit::param_range("time_step").min, knit::param_range("time_step").max));
+  add_integrator_option(cmd, o->integrator);
   cmd->add_option("--clamp-stitches", o->stretch.clamp_stitches,
                   "columns, rows or corner stitches held by each clamp");
   cmd->add_flag("--sheet", o->use_sheet,
@@ -106,6 +119,18 @@ void register_stretch(CLI::App& app) {
       throw std::invalid_argument("stretch: give either one PATTERN or --from STATE");
     o->stretch.direction = knit::parse_stretch_direction(o->direction);
     o->stretch.params.discretisation.contact_points = o->contact_points;
+    if (cmd->count("--time-step")) o->stretch.params.solver.time_step = o->time_step;
+    if (cmd->count("--integrator"))
+      o->stretch.params.solver.integrator = knit::parse_integrator(o->integrator);
+    if (o->use_sheet &&
+        (cmd->count("--hold") + cmd->count("--hold-time") + cmd->count("--hold-damped") +
+             cmd->count("--time-step") + cmd->count("--integrator") >
+         0))
+      throw std::invalid_argument(
+          "stretch --sheet: the sheet is pulled through equilibria already; --hold, "
+          "--hold-time, --hold-damped, --time-step and --integrator are for the yarn model");
+    if ((cmd->count("--hold-time") || o->stretch.hold_damped) && !cmd->count("--hold"))
+      throw std::invalid_argument("stretch: --hold-time and --hold-damped need --hold");
     o->stretch.out_dir = o->out;
     o->stretch.overwrite = o->overwrite;
     o->stretch.progress = !o->quiet;

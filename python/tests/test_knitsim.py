@@ -175,6 +175,18 @@ def test_stretch_returns_its_curve(small_knit, tmp_path):
     assert curve["force_moving"][-1] > 0 and curve["force_fixed"][-1] > 0
 
 
+def test_stretch_with_held_clamps_samples_the_holds(small_knit, tmp_path):
+    path = str(tmp_path / "knit.kstate")
+    small_knit.save(path)
+    r = knitsim.stretch(path, direction="course", to=0.1, hold=0.05, hold_time=0.02)
+    assert r["status"] == "ok"
+    curve = r["curve"]
+    # the unrelaxed start, then the ends of the holds at strain 0, 0.05 and 0.1
+    assert list(curve["equilibrium"]) == [False, True, True, True]
+    assert curve["strain"][1:] == pytest.approx([0, 0.05, 0.1], abs=1e-9)
+    assert all(curve["force_residual"] >= 0)
+
+
 def test_errors_are_the_librarys_messages(tmp_path):
     with pytest.raises(ValueError, match="not a built-in pattern"):
         knitsim.relax("no_such_pattern", rows=4, cols=4)

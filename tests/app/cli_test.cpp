@@ -456,6 +456,14 @@ TEST(Cli, SheetStretchRefusesBadRequestsAndRuns) {
   EXPECT_EQ(r.code, 1);
   EXPECT_NE(r.output.find("k_shear"), std::string::npos) << r.output;
   EXPECT_FALSE(std::filesystem::exists(dir));
+  // the held protocol is the yarn model's, and its options go with --hold
+  r = run("stretch --from " + knit + " --sheet --hold 0.05 --out " + dir);
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.output.find("--hold"), std::string::npos) << r.output;
+  r = run("stretch --from " + knit + " --hold-time 0.2 --out " + dir);
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.output.find("need --hold"), std::string::npos) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(dir));
   r = run("stretch --from " + knit + " --sheet --to 0.1 --no-render -q --out " + dir);
   ASSERT_EQ(r.code, 0) << r.output;
   EXPECT_TRUE(std::filesystem::exists(dir + "/stretch.csv"));

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
@@ -135,6 +136,51 @@ TEST(Stretch, ARelativePathIsReadFromTheWorkingDirectory) {
   EXPECT_EQ(error, "");
 }
 
+// The quasi-static protocol: one sample at the end of every hold (after a hold at strain
+// 0 and after each step of 0.1), the forces the clamps' static reactions there. Newton's
+// second law ties the two clamps together whether the sample has come to rest or not:
+// with gravity off the internal forces cancel, so the clamps' net force is Σ m a over the
+// control points, the accelerations that the force residual R measures (its mass-weighted
+// RMS), hence |F_moving − F_fixed| ≤ M R along the pull (Cauchy–Schwarz).
+TEST(Stretch, HeldClampsBalanceAsNewtonSays) {
+  StretchOptions o;
+  o.to_strain = 0.2;
+  o.hold_strain = 0.1;
+  o.hold_time = 0.05;
+  o.progress = false;
+  o.out_dir = (fs::path(::testing::TempDir()) / "stretch_hold").string();
+  o.overwrite = true;
+  o.render = false;
+  const StretchResult r = stretch_knit(relaxed_sample(), o);
+  ASSERT_EQ(r.report.summary["status"], "ok") << r.report.summary.dump(2);
+  ASSERT_EQ(r.curve.size(), 4u);  // the start, and the holds at strain 0, 0.1, 0.2
+  const double strains[] = {0, 0, 0.1, 0.2};
+  const double mass = stretch_geometry(relaxed_sample(), o).model.mass.sum();
+  const double cycle = r.curve[1].time;
+  for (size_t i = 0; i < r.curve.size(); ++i) {
+    const StretchSample& s = r.curve[i];
+    SCOPED_TRACE("sample " + std::to_string(i));
+    EXPECT_NEAR(s.strain, strains[i], 1e-9);
+    EXPECT_EQ(s.equilibrium, i > 0);
+    EXPECT_NEAR(s.time, static_cast<double>(i) * cycle, 1e-9);
+    ASSERT_TRUE(std::isfinite(s.force_residual));
+    EXPECT_LE(std::abs(s.force_moving - s.force_fixed), mass * s.force_residual * 1.01)
+        << s.force_moving << " vs " << s.force_fixed << " dyn, R " << s.force_residual;
+  }
+  // each hold ends nearer to rest than the unrelaxed start
+  for (size_t i = 1; i < r.curve.size(); ++i)
+    EXPECT_LT(r.curve[i].force_residual, r.curve[0].force_residual);
+  std::ifstream in(o.out_dir + "/summary.json");
+  const auto summary = nlohmann::json::parse(in);
+  EXPECT_EQ(summary["protocol"], "hold");
+  EXPECT_NEAR(summary["hold_strain"].get<double>(), 0.1, 1e-12);
+  EXPECT_TRUE(summary["stretch"].contains("hold_residual_max"));
+  const CsvTable t = read_csv(o.out_dir + "/stretch.csv");
+  EXPECT_EQ(t.rows.size(), 4u);
+  EXPECT_EQ(t.rows[0][t.column("equilibrium", "stretch.csv")], 0.0);
+  EXPECT_EQ(t.rows[3][t.column("equilibrium", "stretch.csv")], 1.0);
+}
+
 TEST(Stretch, BadOptionsAreRefusedBeforeAnythingIsWritten) {
   const std::string out = (fs::path(::testing::TempDir()) / "stretch_bad").string();
   fs::remove_all(out);
@@ -159,6 +205,14 @@ TEST(Stretch, BadOptionsAreRefusedBeforeAnythingIsWritten) {
   wide.direction = StretchDirection::WALE;
   wide.clamp_stitches = 3;  // 5 rows cannot hold two clamps of 3
   EXPECT_NE(message(wide).find("need at least 7"), std::string::npos) << message(wide);
+  StretchOptions steps;
+  steps.to_strain = 0.2;
+  steps.hold_strain = 0.3;  // a step beyond the whole pull
+  EXPECT_NE(message(steps).find("--hold"), std::string::npos) << message(steps);
+  StretchOptions still;
+  still.hold_strain = 0.1;
+  still.hold_time = 0;
+  EXPECT_NE(message(still).find("--hold-time"), std::string::npos) << message(still);
   EXPECT_FALSE(fs::exists(out)) << "a refused stretch wrote its directory";
 }
 

@@ -39,6 +39,13 @@ class FireFilter : public VelocityFilter {
   void apply(const Model& model, const Eigen::VectorXd& q, Eigen::VectorXd& v, double time,
              double h) override;
 
+  /// Forgets the last output and starts again at α_START (a new relaxation, e.g. after a
+  /// clamp moved); the restart count is kept.
+  void reset() {
+    m_has_prev = false;
+    m_alpha = ALPHA_START;
+    m_downhill = 0;
+  }
   /// Times the yarn was stopped because it went uphill (P ≤ 0).
   long long restarts() const { return m_restarts; }
   double alpha() const { return m_alpha; }

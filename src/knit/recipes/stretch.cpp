@@ -1,6 +1,7 @@
 #include "knit/recipes/stretch.hpp"
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -10,6 +11,7 @@
 #include <stdexcept>
 
 #include "knit/analysis/fabric_shape.hpp"
+#include "knit/filters/hold_relax.hpp"
 #include "knit/io/plot.hpp"
 #include "knit/io/run_dir.hpp"
 #include "knit/io/state_file.hpp"
@@ -80,7 +82,9 @@ Scene stretch_scene(const std::string& path, const StretchOptions& o,
 }
 
 // least-squares slope of y against x over the samples with x in [lo, hi]; NaN if < 3
-double slope(const std::vector<StretchSample>& c, size_t n, double lo, double hi) {
+// (< 2 with `two`)
+double slope(const std::vector<StretchSample>& c, size_t n, double lo, double hi,
+             bool two = false) {
   double sx = 0, sy = 0, sxx = 0, sxy = 0;
   int m = 0;
   for (size_t i = 0; i < n; ++i) {
@@ -92,7 +96,7 @@ double slope(const std::vector<StretchSample>& c, size_t n, double lo, double hi
     sxy += x * y;
     ++m;
   }
-  if (m < 3) return std::numeric_limits<double>::quiet_NaN();
+  if (m < (two ? 2 : 3)) return std::numeric_limits<double>::quiet_NaN();
   const double den = m * sxx - sx * sx;
   return den > 0 ? (m * sxy - sx * sy) / den : std::numeric_limits<double>::quiet_NaN();
 }
@@ -103,8 +107,12 @@ nlohmann::json number_or_null(double x) {
 
 }  // namespace
 
-nlohmann::json stretch_measures(const std::vector<StretchSample>& curve, double to,
-                                double initial_separation) {
+nlohmann::json stretch_measures(const std::vector<StretchSample>& all, double to,
+                                double initial_separation, double hold_strain) {
+  const bool held = hold_strain > 0;
+  std::vector<StretchSample> curve;
+  for (const StretchSample& s : all)
+    if (!held || s.equilibrium) curve.push_back(s);
   nlohmann::json m;
   m["initial_separation_cm"] = initial_separation;
   // the first pull: samples up to the first one at the target strain
@@ -114,16 +122,17 @@ nlohmann::json stretch_measures(const std::vector<StretchSample>& curve, double 
       n = i + 1;
       break;
     }
-  const double window = 0.1 * to;
-  // the small-strain slope leaves out the rest sample at strain 0: a clamp that starts
-  // moving at speed meets the damping's drag at once, a jump that is not stiffness
-  const double k0 = slope(curve, n, 1e-12, window);
+  const double window = std::max(0.1 * to, 2 * hold_strain * (1 + 1e-9));
+  // a continuous pull's small-strain slope leaves out the rest sample at strain 0: a
+  // clamp that starts moving at speed meets the damping's drag at once, a jump that is
+  // not stiffness; the quasi-static curve's first sample is a rest like the others
+  const double k0 = slope(curve, n, held ? -1e-12 : 1e-12, window, held);
   m["stiffness_small_strain"] = number_or_null(k0);
-  m["stiffness_end"] = number_or_null(slope(curve, n, to - window, to));
+  m["stiffness_end"] = number_or_null(slope(curve, n, to - window, to, held));
   double stiffening = std::numeric_limits<double>::quiet_NaN();
   if (std::isfinite(k0) && k0 > 0)
     for (double e = window; e + window <= to * (1 + 1e-9); e += 0.5 * window)
-      if (slope(curve, n, e, e + window) >= 3 * k0) {
+      if (slope(curve, n, e, e + window, held) >= 3 * k0) {
         stiffening = e;
         break;
       }
@@ -148,12 +157,15 @@ nlohmann::json stretch_measures(const std::vector<StretchSample>& curve, double 
 void write_stretch_csv(const std::vector<StretchSample>& curve, const std::string& path) {
   std::ostringstream o;
   o << "time_s,strain,force_fixed_dyn,force_moving_dyn,width_cm,potential_energy_erg,"
-       "kinetic_energy_erg,min_contact_distance,edge_curl\n"
+       "kinetic_energy_erg,min_contact_distance,edge_curl,force_residual,equilibrium\n"
     << std::setprecision(10);
-  for (const StretchSample& s : curve)
+  for (const StretchSample& s : curve) {
     o << s.time << "," << s.strain << "," << s.force_fixed << "," << s.force_moving << ","
       << s.width << "," << s.potential_energy << "," << s.kinetic_energy << ","
-      << s.min_contact_distance << "," << s.edge_curl << "\n";
+      << s.min_contact_distance << "," << s.edge_curl << ",";
+    o << (std::isfinite(s.force_residual) ? s.force_residual : -1.0) << ","
+      << (s.equilibrium ? 1 : 0) << "\n";
+  }
   write_file_atomic(path, o.str());
 }
 
@@ -203,10 +215,17 @@ nlohmann::json render_stretch(const std::string& out_dir, const std::vector<Stre
   std::vector<Image> panels;
   std::vector<std::string> labels;
   nlohmann::json shown = nlohmann::json::object();
+  // a quasi-static curve shows its rests (the unrelaxed start only if it has none)
+  const bool held =
+      std::any_of(curve.begin(), curve.end(), [](const StretchSample& s) { return s.equilibrium; });
   for (double e : render_strains(to)) {
-    size_t best = 0;
+    size_t best = curve.size();
     for (size_t i = 0; i < end; ++i)
-      if (std::abs(curve[i].strain - e) < std::abs(curve[best].strain - e)) best = i;
+      if ((!held || curve[i].equilibrium) &&
+          (best == curve.size() ||
+           std::abs(curve[i].strain - e) < std::abs(curve[best].strain - e)))
+        best = i;
+    if (best == curve.size()) best = 0;
     panels.push_back(render_state(read_state_file(frames[best]), ro));
     const std::string name = "renders/strain_" + strain_label(e) + ".png";
     write_png(panels.back(), (dir / name).string());
@@ -241,6 +260,12 @@ void validate_stretch_options(const StretchOptions& o) {
     throw std::invalid_argument("render size: expected 16 to 8192 pixels each way");
   if (!(o.output_strain > 0) || !(o.output_strain <= o.to_strain))
     throw std::invalid_argument("output strain: expected (0, --to]");
+  if (!std::isfinite(o.hold_strain) || o.hold_strain < 0 || o.hold_strain > o.to_strain)
+    throw std::invalid_argument("--hold: expected a strain step in (0, --to], got " +
+                                short_number(o.hold_strain));
+  if (o.hold_strain > 0 && (!(o.hold_time > 0) || !std::isfinite(o.hold_time) || o.hold_time > 100))
+    throw std::invalid_argument("--hold-time: expected (0, 100] s, got " +
+                                short_number(o.hold_time));
   validate_params(o.params);
 }
 
@@ -313,7 +338,11 @@ void write_stretch_outputs(const StretchOptions& o, const std::vector<StretchSam
   write_stretch_csv(curve, (dir / "stretch.csv").string());
   if (!find_gnuplot().empty()) {
     PlotSeries fixed{"fixed clamp", {}, {}}, pulled{"moving clamp", {}, {}}, width{"width", {}, {}};
+    // a quasi-static curve is its rests
+    const bool held = std::any_of(curve.begin(), curve.end(),
+                                  [](const StretchSample& s) { return s.equilibrium; });
     for (const StretchSample& s : curve) {
+      if (held && !s.equilibrium) continue;
       fixed.x.push_back(s.strain);
       fixed.y.push_back(s.force_fixed);
       pulled.x.push_back(s.strain);
@@ -343,33 +372,68 @@ std::string stretch_label(const StateFile& file, StretchDirection direction) {
          stretch_direction_name(direction);
 }
 
-StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions& o) {
+StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions& opts) {
   // everything is validated before anything is written
-  validate_stretch_options(o);
+  validate_stretch_options(opts);
+  StretchOptions o = opts;
+  const bool held = o.hold_strain > 0, fire = held && !o.hold_damped;
+  if (fire) o.params.material.k_global = 0;  // a drag: zero at rest, it only slows FIRE
   const StretchGeometry g = stretch_geometry(kstate_path, o);
   StretchResult result;
   result.initial_separation = g.separation;
   result.axis = g.axis;
   const Eigen::Vector3d axis = g.axis;
+  const double h = o.params.solver.time_step;
 
-  // the moving clamp: out to the target strain, then back and forth, each pull a whole
-  // number of steps (a partial last step would move the clamp slower and show as a dip)
-  const double stroke = o.to_strain * result.initial_separation;
-  const double h0 = o.params.solver.time_step;
-  const long long pull_steps = std::max(1LL, std::llround(stroke / (o.speed * h0)));
-  const double pull_time = static_cast<double>(pull_steps) * h0;
-  result.speed = stroke / pull_time;
+  // the moving clamp's keyframes (translation along the axis, cm)
   nlohmann::json keyframes = nlohmann::json::array({{{"time", 0.0}}});
-  for (int k = 1; k <= 1 + o.cycles; ++k) {
-    const Eigen::Vector3d t = (k % 2 == 1 ? stroke : 0.0) * axis;
-    keyframes.push_back({{"time", k * pull_time}, {"translate", {t[0], t[1], t[2]}}});
+  auto keyframe = [&](double time, double moved) {
+    const Eigen::Vector3d t = moved * axis;
+    keyframes.push_back({{"time", time}, {"translate", {t[0], t[1], t[2]}}});
+  };
+  const double stroke = o.to_strain * result.initial_separation;
+  long long steps = 0;         // of the whole run
+  long long output_every = 0;  // steps between samples
+  long long hold_steps = 0;
+  std::vector<std::pair<double, double>> holds;
+  if (!held) {
+    // out to the target strain, then back and forth, each pull a whole number of steps
+    // (a partial last step would move the clamp slower and show as a dip)
+    const long long pull_steps = std::max(1LL, std::llround(stroke / (o.speed * h)));
+    const double pull_time = static_cast<double>(pull_steps) * h;
+    result.speed = stroke / pull_time;
+    for (int k = 1; k <= 1 + o.cycles; ++k) keyframe(k * pull_time, k % 2 == 1 ? stroke : 0.0);
+    steps = (1 + o.cycles) * pull_steps;
+    output_every =
+        std::max(1LL, std::llround(o.output_strain * result.initial_separation / (o.speed * h)));
+  } else {
+    // a hold at strain 0, then per increment a move of move_steps and a hold of
+    // hold_steps: every (move + hold) steps ends at rest, and is sampled
+    const int increments = static_cast<int>(std::ceil(o.to_strain / o.hold_strain - 1e-9));
+    const double inc = stroke / increments;
+    const long long move_steps = std::max(1LL, std::llround(inc / (o.speed * h)));
+    hold_steps = std::max(1LL, std::llround(o.hold_time / h));
+    result.speed = inc / (static_cast<double>(move_steps) * h);
+    const long long cycle = move_steps + hold_steps;
+    const double T = static_cast<double>(cycle) * h;
+    holds.emplace_back(0.0, T);
+    double moved = 0;
+    int n = 0;
+    for (int k = 0; k <= o.cycles; ++k)
+      for (int i = 1; i <= increments; ++i) {
+        ++n;
+        const double start = n * T, stop = start + static_cast<double>(move_steps) * h;
+        keyframe(start, moved);
+        moved = (k % 2 == 0 ? i : increments - i) * inc;
+        keyframe(stop, moved);
+        holds.emplace_back(stop, (n + 1) * T);
+      }
+    steps = static_cast<long long>(n + 1) * cycle;
+    output_every = cycle;
   }
   Scene scene = stretch_scene(kstate_path, o, keyframes);
-  const double h = scene.model.params.solver.time_step;
-  scene.duration = static_cast<double>((1 + o.cycles) * pull_steps) * h;
-  scene.output_every = std::max(
-      1,
-      static_cast<int>(std::lround(o.output_strain * result.initial_separation / (o.speed * h))));
+  scene.duration = static_cast<double>(steps) * h;
+  scene.output_every = static_cast<int>(std::min<long long>(output_every, 1'000'000'000));
   if (!o.out_dir.empty()) prepare_run_directory(o.out_dir, o.overwrite);
 
   const Clamp& moving = scene.model.clamps[1];
@@ -378,8 +442,11 @@ StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions&
     s.time = state.time;
     const double moved = moving.pose(state.time).translation.dot(axis);
     s.strain = moved / result.initial_separation;
-    if (const ConstraintRecord* f = data.constraint("fixed")) s.force_fixed = -f->force.dot(axis);
-    if (const ConstraintRecord* f = data.constraint("moving")) s.force_moving = f->force.dot(axis);
+    // the quasi-static curve: the static reactions, without the step's inertia
+    const ConstraintRecord* f = held ? data.static_constraint("fixed") : data.constraint("fixed");
+    const ConstraintRecord* m = held ? data.static_constraint("moving") : data.constraint("moving");
+    if (f) s.force_fixed = -f->force.dot(axis);
+    if (m) s.force_moving = m->force.dot(axis);
     s.width = g.width(state.q, moved);
     s.potential_energy = data.potential_energy;
     s.kinetic_energy = data.kinetic_energy;
@@ -387,24 +454,40 @@ StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions&
                                  ? data.contact.min_distance_ratio
                                  : -1;
     s.edge_curl = measure_fabric(scene.model, state.q).edge_curl;
+    s.force_residual = data.force_residual;
+    s.equilibrium = held && state.time > 0.5 * h;
     result.curve.push_back(s);
   };
 
-  auto sim = make_scene_simulator(scene);
+  std::unique_ptr<Simulator> sim;
+  if (fire) {
+    sim = std::make_unique<Simulator>(scene.model);
+    sim->add_filter(
+        std::make_unique<HoldRelaxFilter>(scene_filters(scene, sim->model()), std::move(holds)));
+  } else {
+    sim = make_scene_simulator(scene);
+  }
   SimulateOptions so;
   so.out_dir = o.out_dir;
   so.progress = o.progress;
   so.write_frames = o.write_frames;
   RunOptions run = scene_run_options(scene, so);
   run.on_output = sample;
+  if (held) run.before_output = [](Simulator& s, const State& st) { s.force_residual(st); };
   run.extra = {{"model", "yarn"},
                {"direction", stretch_direction_name(o.direction)},
                {"to_strain", o.to_strain},
                {"cycles", o.cycles},
                {"speed_cm_s", result.speed},
+               {"protocol", held ? "hold" : "continuous"},
                {"clamp_stitches", o.clamp_stitches},
                {"from", kstate_path},
                {"axis", {axis[0], axis[1], axis[2]}}};
+  if (held) {
+    run.extra["hold_strain"] = o.to_strain / std::ceil(o.to_strain / o.hold_strain - 1e-9);
+    run.extra["hold_time_s"] = static_cast<double>(hold_steps) * h;
+    run.extra["hold_relax"] = fire ? "fire" : "damped";
+  }
   for (const auto& [k, v] : o.extra.items()) run.extra[k] = v;
   if (g.file.knit) {
     run.extra["pattern"] = g.file.knit->pattern;
@@ -412,7 +495,21 @@ StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions&
     run.extra["cols"] = g.file.knit->cols;
   }
   run.on_finish = [&](Simulator&, const State&, nlohmann::json& summary) {
-    summary["stretch"] = stretch_measures(result.curve, o.to_strain, result.initial_separation);
+    summary["stretch"] =
+        stretch_measures(result.curve, o.to_strain, result.initial_separation, o.hold_strain);
+    if (held) {
+      // how near to rest the holds came: the force residual at their ends
+      double worst = 0, sum = 0;
+      int count = 0;
+      for (const StretchSample& s : result.curve)
+        if (s.equilibrium && std::isfinite(s.force_residual)) {
+          worst = std::max(worst, s.force_residual);
+          sum += s.force_residual;
+          ++count;
+        }
+      summary["stretch"]["hold_residual_max"] = worst;
+      summary["stretch"]["hold_residual_mean"] = count ? sum / count : 0.0;
+    }
   };
   result.report = run_simulation(*sim, scene.state, run);
 
@@ -438,14 +535,22 @@ std::string plot_stretch_runs(const std::vector<std::string>& dirs, const std::s
           s["direction"].get<std::string>();
       if (s.contains("model") && s["model"] == "sheet") {
         label += ", sheet";
+      } else if (s.contains("protocol") && s["protocol"] == "hold") {
+        label += ", quasi-static";
       } else if (s.contains("speed_cm_s") && s["speed_cm_s"].is_number()) {
         std::ostringstream speed;
         speed << std::setprecision(3) << s["speed_cm_s"].get<double>();
         label += ", " + speed.str() + " cm/s";
       }
     }
+    // a quasi-static run's curve is its rests (older runs have no such column)
+    const auto eq = std::find(t.columns.begin(), t.columns.end(), "equilibrium");
+    const int e = eq == t.columns.end() ? -1 : static_cast<int>(eq - t.columns.begin());
+    const bool held = e >= 0 && std::any_of(t.rows.begin(), t.rows.end(),
+                                            [e](const auto& row) { return row[e] > 0.5; });
     PlotSeries p{label, {}, {}};
     for (const auto& row : t.rows) {
+      if (held && row[e] < 0.5) continue;
       p.x.push_back(row[x]);
       p.y.push_back(row[y]);
     }

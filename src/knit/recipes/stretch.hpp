@@ -10,6 +10,7 @@
 // Recorded at every written state (StretchSample): nominal strain, the force each clamp
 // exerts along the pull axis (from the clamps' constraint records, positive in tension),
 // the sample's width across the pull at its middle, energies and closest approach.
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -37,6 +38,19 @@ struct StretchOptions {
   double speed = 5.0;           ///< the moving clamp's speed (cm/s)
   int clamp_stitches = 2;       ///< columns, rows or corner size held by each clamp
   double output_strain = 0.01;  ///< a sample (and a written state) every this much strain
+  /// > 0: the quasi-static protocol. The clamp moves (at `speed`) in steps of this much
+  /// strain and stands still for `hold_time` s after each (and once at strain 0 before the
+  /// first), while FIRE relaxes the yarn to rest (filters/hold_relax.hpp); the curve is
+  /// sampled at the end of each hold, with the clamps' static reactions
+  /// (StepData::static_constraints) as the forces and the force residual as how near to
+  /// rest each sample is. Global damping is off (k_global = 0): it is zero at rest. 0: a
+  /// continuous pull at `speed`, sampled every `output_strain`.
+  double hold_strain = 0;
+  double hold_time = 0.3;  ///< s of each hold (with hold_strain)
+  /// With hold_strain: hold with the simulation's own damping (the non-rigid damping
+  /// filter and global damping) instead of FIRE — a stress-relaxation test: the force
+  /// decays through each hold as the damped knit creeps, sampled at its end.
+  bool hold_damped = false;
   Params params = stretch_params();
   std::string out_dir;  ///< empty: write nothing
   bool overwrite = false;
@@ -63,6 +77,12 @@ struct StretchSample {
   /// the edges' roll out of the fabric's plane, in stitch widths (FabricShape::edge_curl;
   /// clamped edges are held flat, so a course pull shows the top and bottom edges' curl)
   double edge_curl = 0;
+  /// The force residual at the sample (cm/s²; Simulator::force_residual), measured by the
+  /// quasi-static protocol; NaN otherwise.
+  double force_residual = std::numeric_limits<double>::quiet_NaN();
+  /// A sample at the end of a hold (the quasi-static protocol's curve); false for the
+  /// unrelaxed start and for every sample of a continuous pull.
+  bool equilibrium = false;
 };
 
 struct StretchResult {
@@ -124,11 +144,15 @@ StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions&
 /// pull reaches three times the small-strain slope; null if never), work_erg (∫ F dx of the moving
 /// clamp over the whole run), max_force_dyn, width_change (width at the end of the pull over the
 /// initial width, − 1).
+/// With hold_strain > 0 (the quasi-static protocol) only the equilibrium samples count, the
+/// rest sample at strain 0 among them (it has no drag), and each window spans at least two
+/// holds.
 nlohmann::json stretch_measures(const std::vector<StretchSample>& curve, double to_strain,
-                                double initial_separation);
+                                double initial_separation, double hold_strain = 0);
 
 /// Writes the samples as CSV: time_s, strain, force_fixed_dyn, force_moving_dyn, width_cm,
-/// potential_energy_erg, kinetic_energy_erg, min_contact_distance, edge_curl.
+/// potential_energy_erg, kinetic_energy_erg, min_contact_distance, edge_curl,
+/// force_residual (cm/s²; −1 when not measured), equilibrium (1 at the end of a hold).
 void write_stretch_csv(const std::vector<StretchSample>& curve, const std::string& path);
 
 /// Draws the force–strain curves (moving clamp) of several stretch runs' directories in
