@@ -42,6 +42,26 @@ TEST(Imex, BandSolverMatchesDenseCholesky) {
   solver.solve(rhs, x);
   EXPECT_LT((x - expected).norm(), 1e-10 * expected.norm());
   EXPECT_LT((dense * x - rhs).norm(), 1e-10 * rhs.norm());
+
+  // with given values at some coordinates (a clamp's): the free ones solve the rows of
+  // the free ones, and the fixed ones' rows leave over what held them
+  const std::vector<int> fixed = {3, 4, 5, 17, 30};
+  std::vector<char> is_fixed(m.num_dof(), 0);
+  for (int d : fixed) is_fixed[d] = 1;
+  Eigen::VectorXd given = rhs;  // rhs, with each fixed coordinate's value in its place
+  for (int d : fixed) given[d] = 0.1 * (d + 1);
+  ASSERT_TRUE(solver.factor(m, blocks, h2, fixed));
+  solver.solve(given, x);
+  for (int d : fixed) EXPECT_EQ(x[d], given[d]);
+  const Eigen::VectorXd r = dense * x - rhs;
+  for (int d = 0; d < m.num_dof(); ++d)
+    if (!is_fixed[d]) EXPECT_LT(std::abs(r[d]), 1e-10 * rhs.norm()) << "row " << d;
+  std::vector<double> b_fixed, left;
+  for (int d : fixed) b_fixed.push_back(rhs[d]);
+  solver.fixed_residuals(x, b_fixed, left);
+  for (size_t k = 0; k < fixed.size(); ++k)
+    EXPECT_NEAR(left[k], r[fixed[k]], 1e-10 * rhs.norm()) << "fixed row " << fixed[k];
+
   blocks[3] = -blocks[3] * 1e6;  // not positive definite: refused, not solved
   EXPECT_FALSE(solver.factor(m, blocks, h2));
 }
@@ -254,6 +274,76 @@ TEST(Imex, GluedRingRestsWhereTheForcesBalance) {
   EXPECT_LT(r_im, 1e-4 * start);
   // measured: 0.026 r (0.24 r with the glue left to the projection alone)
   EXPECT_LT(diff, 0.08 * r) << "largest control-point distance between the two rests (cm)";
+}
+
+// Pins and clamps are held by the IMEX solve, as glues are: a pin's rows enter it as
+// constraints, a clamp's control points are given the velocity that takes them to the
+// clamp. Left to the projection after the solve, the two would come to rest against each
+// other. A yarn held taut at both ends (relaxation parameters, its rest length shrunk)
+// then stopped with a force residual of 5.4 × 10⁵ cm/s² between two pins, and static pin
+// loads of 239 dyn for a weight of 59. Between two clamps it stopped with 1.0 × 10⁵
+// cm/s² and 83 dyn. Now both rest where the forces balance (R ≈ 10⁻⁶), and the holds
+// carry the weight exactly.
+TEST(Imex, PinsAndClampsRestWhereTheForcesBalance) {
+  {  // taut between two pins
+    ModelBuilder b;
+    b.add_yarn(line(20, 10.0));
+    b.add_pin({{0, 0.0}, Eigen::Vector3d::Zero()});
+    b.add_pin({{19, 1.0}, Eigen::Vector3d::Zero()});
+    Params p = Params::relaxation();
+    p.material.contact = false;
+    p.solver.integrator = Integrator::IMEX;
+    Model m = b.build(p, 0.935);
+    m.pins[0].origin = point_position(m, b.positions(), {0, 0.0});
+    m.pins[1].origin = point_position(m, b.positions(), {19, 1.0});
+    build_constraint_groups(m);
+    Simulator sim(m);
+    State s;
+    s.q = b.positions();
+    s.v = Eigen::VectorXd::Zero(s.q.size());
+    const double start = sim.force_residual(s);
+    for (int i = 0; i < 6000; ++i) ASSERT_TRUE(sim.step(s, 3e-4).ok()) << "step " << i;
+    const double rest = sim.force_residual(s);
+    const double weight = m.mass.sum() * 981;
+    const Eigen::Vector3d held =
+        sim.data().static_constraint("pin0")->force + sim.data().static_constraint("pin1")->force;
+    std::cout << "pinned yarn: force residual " << start << " → " << rest << " cm/s²; pins hold "
+              << held.z() << " dyn of a weight of " << weight << "\n";
+    EXPECT_LT(rest, 1e-6 * start);
+    EXPECT_NEAR(held.z(), weight, 1e-3 * weight);
+  }
+  {  // taut between two clamps on its first and last four control points
+    ModelBuilder b;
+    b.add_yarn(line(20, 10.0));
+    Clamp left, right;
+    left.name = "left";
+    right.name = "right";
+    left.control_points = {0, 1, 2, 3};
+    right.control_points = {19, 20, 21, 22};
+    b.add_clamp(left);
+    b.add_clamp(right);
+    Params p = Params::relaxation();
+    p.material.contact = false;
+    p.solver.integrator = Integrator::IMEX;
+    Simulator sim(b.build(p, 0.935));
+    State s;
+    s.q = b.positions();
+    s.v = Eigen::VectorXd::Zero(s.q.size());
+    const double start = sim.force_residual(s);
+    for (int i = 0; i < 6000; ++i) ASSERT_TRUE(sim.step(s, 3e-4).ok()) << "step " << i;
+    const double rest = sim.force_residual(s);
+    const double weight = sim.model().mass.sum() * 981;
+    const Eigen::Vector3d held =
+        sim.data().static_constraint("left")->force + sim.data().static_constraint("right")->force;
+    sim.step(s, 3e-4);
+    const Eigen::Vector3d stepped =
+        sim.data().constraint("left")->force + sim.data().constraint("right")->force;
+    std::cout << "clamped yarn: force residual " << start << " → " << rest << " cm/s²; the clamps "
+              << "hold " << held.z() << " (static), " << stepped.z() << " (step) dyn of " << weight
+              << "; tension " << sim.data().constraint("right")->force.x() << " dyn\n";
+    EXPECT_LT(rest, 1e-6 * start);
+    EXPECT_NEAR(held.z(), weight, 1e-3 * weight);
+  }
 }
 
 // A relaxed 12×12 stockinette continued at h = 2e-4 s: the explicit step fails within

@@ -7,6 +7,7 @@
 #include <limits>
 #include <sstream>
 
+#include "knit/constraints/clamp.hpp"
 #include "knit/contact/contact_term.hpp"
 #include "knit/energy/bending.hpp"
 #include "knit/energy/global_damping.hpp"
@@ -237,40 +238,91 @@ bool Simulator::imex_step(const State& s, double h, Eigen::VectorXd& q_out,
     return true;
   }
   ScopedTimer timer(m_data.stage_seconds["implicit"]);
-  if (!m_stiff.factor(m_model, m_blocks, h * h)) return false;
+  build_solve_constraints();
+  if (!m_stiff.factor(m_model, m_blocks, h * h, m_fixed_dofs)) return false;
   m_rhs = h * (m_force + m_force_implicit);
   for (int i = 0; i < m_model.num_seg(); ++i) {
     const int base = 3 * m_model.seg_cp[i];
     m_rhs.segment<12>(base) -= (h * h) * (m_blocks[i] * s.v.segment<12>(base));
   }
+  // a clamped control point's Δv takes it to the clamp's target at t + h
+  m_b_fixed.resize(m_fixed_dofs.size());
+  for (size_t k = 0; k < m_fixed_dofs.size(); ++k) m_b_fixed[k] = m_rhs[m_fixed_dofs[k]];
+  for (const ClampedPoint& c : m_clamped) {
+    const Eigen::Vector3d target = c.group->clamp().target(c.index, s.time + h);
+    m_rhs.segment<3>(3 * c.cp) = (target - s.q.segment<3>(3 * c.cp)) / h - s.v.segment<3>(3 * c.cp);
+  }
   m_stiff.solve(m_rhs, m_dv);
+  m_glue_mu.resize(0);
   hold_glues_in_solve(s, h, m_dv);
   v_out = s.v + m_dv;
   q_out = s.q + h * v_out;
+  record_solve_forces(q_out, s.time + h, h);
   return true;
 }
 
-void Simulator::hold_glues_in_solve(const State& s, double h, Eigen::VectorXd& dv) {
-  if (!m_glue_rows_built) {
-    m_glue_rows_built = true;
-    for (const auto& group : m_model.constraint_groups) {
-      if (group->kind() != "glue") continue;
-      std::vector<Eigen::Triplet<double>> entries;
-      group->jacobian_structure(m_model, entries);
-      const size_t first = m_glue_rows.size();
-      m_glue_rows.resize(first + group->rows());
-      // duplicate entries (control points shared by both glued points) are summed
-      for (const auto& e : entries) {
-        auto& row = m_glue_rows[first + e.row()];
-        auto it =
-            std::find_if(row.begin(), row.end(), [&](const auto& p) { return p.first == e.col(); });
-        if (it == row.end())
-          row.emplace_back(e.col(), e.value());
-        else
-          it->second += e.value();
+void Simulator::build_solve_constraints() {
+  if (m_solve_constraints_built) return;
+  m_solve_constraints_built = true;
+  // the clamps' control points: their new velocity is the clamp's, a given of the solve
+  std::vector<char> fixed(m_model.num_dof(), 0);
+  std::vector<int> owner(m_model.num_dof(), -1);
+  const int groups = static_cast<int>(m_model.constraint_groups.size());
+  for (int g = 0; g < groups; ++g)
+    if (const auto* clamp = dynamic_cast<const ClampGroup*>(m_model.constraint_groups[g].get())) {
+      const Clamp& c = clamp->clamp();
+      for (size_t k = 0; k < c.control_points.size(); ++k) {
+        m_clamped.push_back({clamp, static_cast<int>(c.points.size() + k), c.control_points[k]});
+        for (int d = 0; d < 3; ++d) {
+          fixed[3 * c.control_points[k] + d] = 1;
+          owner[3 * c.control_points[k] + d] = g;
+        }
       }
     }
+  for (int d = 0; d < m_model.num_dof(); ++d)
+    if (fixed[d]) {
+      m_fixed_dofs.push_back(d);
+      m_fixed_group.push_back(owner[d]);
+    }
+  m_solve_force.assign(groups, Eigen::Vector3d::Zero());
+  m_solve_torque.assign(groups, Eigen::Vector3d::Zero());
+  // glues and pins (few rows, constant ∇C) as constraints of the solve; a row on fixed
+  // coordinates alone is the clamp's (left out), and fixed coordinates leave every row
+  int offset = 0;
+  for (int g = 0; g < groups; ++g) {
+    const ConstraintGroup* group = m_model.constraint_groups[g].get();
+    const std::string_view kind = group->kind();
+    if (kind != "glue" && kind != "pin") continue;
+    m_solve_groups.push_back(group);
+    std::vector<Eigen::Triplet<double>> entries;
+    group->jacobian_structure(m_model, entries);
+    std::vector<std::vector<std::pair<int, double>>> rows(group->rows());
+    // duplicate entries (control points shared by both glued points) are summed
+    for (const auto& e : entries) {
+      auto& row = rows[e.row()];
+      auto it =
+          std::find_if(row.begin(), row.end(), [&](const auto& p) { return p.first == e.col(); });
+      if (it == row.end())
+        row.emplace_back(e.col(), e.value());
+      else
+        it->second += e.value();
+    }
+    for (int r = 0; r < group->rows(); ++r) {
+      std::vector<std::pair<int, double>> free;
+      for (const auto& entry : rows[r])
+        if (!fixed[entry.first]) free.push_back(entry);
+      if (free.empty()) continue;
+      m_glue_rows.push_back(std::move(free));
+      m_glue_rows_all.push_back(std::move(rows[r]));
+      m_glue_row_of.push_back(offset + r);
+      m_glue_row_group.push_back({g, r});
+    }
+    offset += group->rows();
   }
+  m_glue_c.resize(offset);
+}
+
+void Simulator::hold_glues_in_solve(const State& s, double h, Eigen::VectorXd& dv) {
   const int m = static_cast<int>(m_glue_rows.size());
   if (m == 0) return;
   // Y = (M + h² K)⁻¹ Jᵀ, S = J Y; J (v + Δv₀ − Y μ) = −C(q, t + h) / h
@@ -284,24 +336,52 @@ void Simulator::hold_glues_in_solve(const State& s, double h, Eigen::VectorXd& d
     for (const auto& [dof, value] : m_glue_rows[r]) column[dof] = 0;
   }
   Eigen::MatrixXd S(m, m);
-  Eigen::VectorXd rhs(m), c(m);
-  int row = 0;
-  for (const auto& group : m_model.constraint_groups) {
-    if (group->kind() != "glue") continue;
-    group->evaluate(m_model, s.q, s.time + h, c.data() + row, nullptr);
-    row += group->rows();
+  Eigen::VectorXd rhs(m);
+  int offset = 0;
+  for (const ConstraintGroup* group : m_solve_groups) {
+    group->evaluate(m_model, s.q, s.time + h, m_glue_c.data() + offset, nullptr);
+    offset += group->rows();
   }
   for (int r = 0; r < m; ++r) {
+    // J v⁺ over every coordinate of the row: a fixed one's v⁺ is known (the solve gave
+    // it its value), only the free ones' are corrected by Y μ
     double jv = 0;
-    for (const auto& [dof, value] : m_glue_rows[r]) jv += value * (s.v[dof] + dv[dof]);
-    rhs[r] = jv + c[r] / h;
+    for (const auto& [dof, value] : m_glue_rows_all[r]) jv += value * (s.v[dof] + dv[dof]);
+    rhs[r] = jv + m_glue_c[m_glue_row_of[r]] / h;
     for (int k = 0; k < m; ++k) {
       double sum = 0;
       for (const auto& [dof, value] : m_glue_rows[r]) sum += value * m_glue_y(dof, k);
       S(r, k) = sum;
     }
   }
-  dv -= m_glue_y * S.ldlt().solve(rhs);
+  m_glue_mu = S.ldlt().solve(rhs);
+  dv -= m_glue_y * m_glue_mu;
+}
+
+void Simulator::record_solve_forces(const Eigen::VectorXd& q, double time, double h) {
+  for (auto& f : m_solve_force) f.setZero();
+  for (auto& t : m_solve_torque) t.setZero();
+  auto add = [&](int g, int dof, double f) {
+    if (g < 0) return;
+    Eigen::Vector3d force = Eigen::Vector3d::Zero();
+    force[dof % 3] = f;
+    m_solve_force[g] += force;
+    const Eigen::Vector3d about = m_model.constraint_groups[g]->torque_point(m_model, q, time);
+    m_solve_torque[g] += (q.segment<3>(dof - dof % 3) - about).cross(force);
+  };
+  // the clamps: what held their control points to the given velocities
+  m_stiff.fixed_residuals(m_dv, m_b_fixed, m_fixed_residual);
+  for (size_t k = 0; k < m_fixed_dofs.size(); ++k)
+    add(m_fixed_group[k], m_fixed_dofs[k], m_fixed_residual[k] / h);
+  // the glues and pins: −Jᵀ μ / h (a glue's record is the force on its point a, rows 0–2)
+  for (size_t r = 0; r < m_glue_rows.size() && r < static_cast<size_t>(m_glue_mu.size()); ++r) {
+    const auto [g, row] = m_glue_row_group[r];
+    if (m_model.constraint_groups[g]->kind() == "glue") {
+      if (row < 3) m_solve_force[g][row] -= m_glue_mu[r] / h;
+      continue;
+    }
+    for (const auto& [dof, value] : m_glue_rows[r]) add(g, dof, -value * m_glue_mu[r] / h);
+  }
 }
 
 ProjectionResult Simulator::project(Eigen::VectorXd& q, Eigen::VectorXd& v, double time, double h) {
@@ -392,6 +472,13 @@ StepResult Simulator::step(State& state, double h) {
   {
     ScopedTimer timer(m_data.stage_seconds["record"]);
     m_projection.record_groups(m_model, state.q, t_new, h, m_data.constraints);
+    // with the IMEX step the solve held the clamps, pins and glues; the projection only
+    // corrected what its linearisation left
+    if (m_model.params.solver.integrator == Integrator::IMEX && m_solve_constraints_built)
+      for (size_t g = 0; g < m_data.constraints.size() && g < m_solve_force.size(); ++g) {
+        m_data.constraints[g].force += m_solve_force[g];
+        m_data.constraints[g].torque += m_solve_torque[g];
+      }
   }
   m_data.warnings.clear();
   const int max_it = m_model.params.solver.max_projection_iterations;

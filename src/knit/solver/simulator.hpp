@@ -27,6 +27,8 @@
 
 namespace knit {
 
+class ClampGroup;
+
 /// How a step (or a run) ended. INTERRUPTED is a run's status only: a signal asked it to
 /// stop after a step that went well.
 /// How a step or run ended. NOT_CONVERGED: a quasi-static solve (the elastic sheet's
@@ -83,12 +85,15 @@ class Simulator {
   /// Stage 1 of the IMEX integrator: the terms without a stiffness at the explicit
   /// midpoint (q + h/2 v, v + h/2 M⁻¹ f(q, v)), those with one (K, f_I) linearly implicit:
   /// (M + h² K) Δv = h (f_E(mid) + f_I(q)) − h² K v, v⁺ = v + Δv, q⁺ = q + h v⁺ (a state
-  /// at rest stays at rest). Glues (few rows, constant ∇C = J) enter the solve as
-  /// constraints on the new velocity, J v⁺ = −C(q, t + h) / h, with multipliers μ:
-  /// (M + h² K) Δv + Jᵀ μ = b. Without them the solve (which sees K but not the glue) and
-  /// the projection after it (which sees the glue but not K, in the metric M) would come
-  /// to rest where they balance, not where the forces do: up to 10⁵ cm/s² of net force
-  /// left on a glued yarn end. Returns false when M + h² K could not be factored.
+  /// at rest stays at rest). Glues and pins (few rows, constant ∇C = J) enter the solve
+  /// as constraints on the new velocity, J v⁺ = −C(q, t + h) / h, with multipliers μ:
+  /// (M + h² K) Δv + Jᵀ μ = b. A clamp's control points are given their new velocity,
+  /// the one that takes them to the clamp's target at t + h, and leave the unknowns.
+  /// Without them the solve (which sees K but not the constraint) and the projection
+  /// after it (which sees the constraint but not K, in the metric M) would come to rest
+  /// where they balance, not where the forces do: up to 10⁵ cm/s² of net force left on a
+  /// glued yarn end, 5 × 10⁵ on a pinned one. Returns false when M + h² K could not be
+  /// factored.
   bool imex_step(const State& state, double h, Eigen::VectorXd& q_out, Eigen::VectorXd& v_out);
   /// Stage 2: projects q (in place) at `time`, correcting v by the displacement / h.
   ProjectionResult project(Eigen::VectorXd& q, Eigen::VectorXd& v, double time, double h);
@@ -139,9 +144,31 @@ class Simulator {
   Eigen::VectorXd m_force_implicit, m_force_term, m_rhs, m_dv;
   StiffSolver m_stiff;
   // the glues' rows in the IMEX solve: ∇C as sparse rows (dof, value), built once
+  // The constraints the IMEX solve holds, built once: the clamps' control points as
+  // given velocities (fixed coordinates of the band solve), the glues' and pins' rows as
+  // constraints with multipliers.
+  void build_solve_constraints();
   void hold_glues_in_solve(const State& state, double h, Eigen::VectorXd& dv);
-  bool m_glue_rows_built = false;
-  std::vector<std::vector<std::pair<int, double>>> m_glue_rows;
+  bool m_solve_constraints_built = false;
+  struct ClampedPoint {
+    const ClampGroup* group;
+    int index;  // the held point's index in the clamp (points first, then control points)
+    int cp;     // the control point
+  };
+  std::vector<ClampedPoint> m_clamped;
+  std::vector<int> m_fixed_dofs;
+  std::vector<const ConstraintGroup*> m_solve_groups;
+  // per row: its free coordinates, all its coordinates, its index among the groups' rows
+  std::vector<std::vector<std::pair<int, double>>> m_glue_rows, m_glue_rows_all;
+  std::vector<int> m_glue_row_of;
+  std::vector<std::pair<int, int>> m_glue_row_group;  // (group, its row) of each row
+  Eigen::VectorXd m_glue_mu;                          // the last solve's multipliers
+  std::vector<int> m_fixed_group;                     // the clamp of each fixed coordinate
+  std::vector<double> m_b_fixed, m_fixed_residual;
+  // what the solve's constraints exerted in the last IMEX step, per constraint group
+  std::vector<Eigen::Vector3d> m_solve_force, m_solve_torque;
+  void record_solve_forces(const Eigen::VectorXd& q, double time, double h);
+  Eigen::VectorXd m_glue_c;
   Eigen::MatrixXd m_glue_y;  // (M + h² K)⁻¹ ∇Cᵀ
 };
 

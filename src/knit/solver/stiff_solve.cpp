@@ -9,7 +9,8 @@ namespace {
 constexpr int W = StiffSolver::BAND + 1;  // stored entries per column
 }
 
-bool StiffSolver::factor(const Model& model, const std::vector<Matrix12d>& blocks, double h2) {
+bool StiffSolver::factor(const Model& model, const std::vector<Matrix12d>& blocks, double h2,
+                         const std::vector<int>& fixed) {
   m_n = model.num_dof();
   m_band.assign(static_cast<size_t>(m_n) * W, 0.0);
   double* a = m_band.data();
@@ -19,6 +20,31 @@ bool StiffSolver::factor(const Model& model, const std::vector<Matrix12d>& block
     const int base = 3 * model.seg_cp[i];
     for (int c = 0; c < 12; ++c)
       for (int r = c; r < 12; ++r) a[(base + c) * W + (r - c)] += h2 * b(r, c);
+  }
+  // the fixed coordinates: their couplings to the free ones kept for solve, then their
+  // rows and columns replaced by the identity's
+  m_fixed.clear();
+  m_fixed_dofs = fixed;
+  if (!fixed.empty()) {
+    std::vector<char> is_fixed(m_n, 0);
+    for (int d : fixed) is_fixed[d] = 1;
+    auto entry = [&](int i, int j) -> double& {  // (i, j) of the symmetric matrix
+      return i >= j ? a[static_cast<size_t>(j) * W + (i - j)]
+                    : a[static_cast<size_t>(i) * W + (j - i)];
+    };
+    for (int d : fixed) {
+      Coupling c{d, {}, {}};
+      for (int j = std::max(0, d - BAND); j <= std::min(m_n - 1, d + BAND); ++j) {
+        if (entry(j, d) == 0) continue;
+        c.row.emplace_back(j, entry(j, d));
+        if (!is_fixed[j]) c.entries.emplace_back(j, entry(j, d));
+      }
+      m_fixed.push_back(std::move(c));
+    }
+    for (int d : fixed) {
+      for (int j = std::max(0, d - BAND); j <= std::min(m_n - 1, d + BAND); ++j) entry(j, d) = 0;
+      entry(d, d) = 1;
+    }
   }
   // band Cholesky, right looking: column j scaled by its pivot, then the trailing
   // triangle within the band updated by its outer product
@@ -41,6 +67,10 @@ bool StiffSolver::factor(const Model& model, const std::vector<Matrix12d>& block
 
 void StiffSolver::solve(const Eigen::VectorXd& rhs, Eigen::VectorXd& x) const {
   x = rhs;
+  // the fixed coordinates' values: what they contribute to the free rows moves to the
+  // right-hand side (their own rows are the identity)
+  for (const Coupling& c : m_fixed)
+    for (const auto& [j, value] : c.entries) x[j] -= value * rhs[c.dof];
   const double* a = m_band.data();
   // L y = b
   for (int j = 0; j < m_n; ++j) {
@@ -56,6 +86,16 @@ void StiffSolver::solve(const Eigen::VectorXd& rhs, Eigen::VectorXd& x) const {
     double s = x[j];
     for (int r = 1; r <= m; ++r) s -= col[r] * x[j + r];
     x[j] = s / col[0];
+  }
+}
+
+void StiffSolver::fixed_residuals(const Eigen::VectorXd& x, const std::vector<double>& b_fixed,
+                                  std::vector<double>& out) const {
+  out.resize(m_fixed.size());
+  for (size_t k = 0; k < m_fixed.size(); ++k) {
+    double ax = 0;
+    for (const auto& [j, value] : m_fixed[k].row) ax += value * x[j];
+    out[k] = ax - b_fixed[k];
   }
 }
 

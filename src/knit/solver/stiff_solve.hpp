@@ -22,12 +22,33 @@ class StiffSolver {
   static constexpr int BAND = 11;
   /// Assembles M + h2 · Σ blocks (h2 = h², s²) for `model` and factors it. Returns false
   /// when the matrix is not positive definite (a block was not semidefinite).
-  bool factor(const Model& model, const std::vector<Matrix12d>& blocks, double h2);
-  /// Solves the factored system for `rhs` (size 3 × control points) into x.
+  /// `fixed` (ascending coordinates): unknowns whose value is given, not solved for — a
+  /// clamp's control points, whose new velocity the clamp prescribes. Their rows and
+  /// columns are taken out of the matrix (what they couple to goes to the right-hand side
+  /// in solve) and replaced by the identity.
+  bool factor(const Model& model, const std::vector<Matrix12d>& blocks, double h2,
+              const std::vector<int>& fixed = {});
+  /// Solves the factored system for `rhs` (size 3 × control points) into x. At a fixed
+  /// coordinate rhs holds its given value, which x then has.
   void solve(const Eigen::VectorXd& rhs, Eigen::VectorXd& x) const;
+  /// The fixed coordinates given in factor, in order.
+  const std::vector<int>& fixed() const { return m_fixed_dofs; }
+  /// What the fixed coordinates' own rows of the original matrix leave over at x:
+  /// (A x − b)_d for each fixed d, in order, with b_d from `b_fixed` (the same order) — the
+  /// force (times h) that held them to their given values.
+  void fixed_residuals(const Eigen::VectorXd& x, const std::vector<double>& b_fixed,
+                       std::vector<double>& out) const;
 
  private:
   int m_n = 0;
+  // per fixed coordinate, its matrix entries with the free ones it coupled to
+  struct Coupling {
+    int dof;
+    std::vector<std::pair<int, double>> entries;  // with the free coordinates
+    std::vector<std::pair<int, double>> row;      // the whole original row in the band
+  };
+  std::vector<Coupling> m_fixed;
+  std::vector<int> m_fixed_dofs;
   // lower band, column major: entry (i, j), j ≤ i ≤ j + BAND, at m_band[j * (BAND + 1) + i − j]
   std::vector<double> m_band;
 };
