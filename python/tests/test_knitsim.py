@@ -162,10 +162,15 @@ def test_contact_set_reads_as_arrays(small_knit):
     assert c["min_distance_ratio"] <= c["d"].min() + 1e-12
 
 
-def test_stretch_returns_its_curve(small_knit, tmp_path):
+@pytest.fixture
+def saved_knit(small_knit, tmp_path):
     path = str(tmp_path / "knit.kstate")
     small_knit.save(path)
-    r = knitsim.stretch(path, direction="course", to=0.05, speed=5.0, output_strain=0.01)
+    return path
+
+
+def test_stretch_returns_its_curve(saved_knit):
+    r = knitsim.stretch(saved_knit, direction="course", to=0.05, speed=5.0, output_strain=0.01)
     assert r["status"] == "ok"
     curve = r["curve"]
     assert curve["strain"][0] == pytest.approx(0, abs=1e-9)
@@ -175,10 +180,8 @@ def test_stretch_returns_its_curve(small_knit, tmp_path):
     assert curve["force_moving"][-1] > 0 and curve["force_fixed"][-1] > 0
 
 
-def test_stretch_with_held_clamps_samples_the_holds(small_knit, tmp_path):
-    path = str(tmp_path / "knit.kstate")
-    small_knit.save(path)
-    r = knitsim.stretch(path, direction="course", to=0.1, hold=0.05, hold_time=0.02)
+def test_stretch_with_held_clamps_samples_the_holds(saved_knit):
+    r = knitsim.stretch(saved_knit, direction="course", to=0.1, hold=0.05, hold_time=0.02)
     assert r["status"] == "ok"
     curve = r["curve"]
     # the unrelaxed start, then the ends of the holds at strain 0, 0.05 and 0.1
