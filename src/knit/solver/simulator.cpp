@@ -325,17 +325,23 @@ void Simulator::build_solve_constraints() {
 void Simulator::hold_glues_in_solve(const State& s, double h, Eigen::VectorXd& dv) {
   const int m = static_cast<int>(m_glue_rows.size());
   if (m == 0) return;
-  // Y = (M + h² K)⁻¹ Jᵀ, S = J Y; J (v + Δv₀ − Y μ) = −C(q, t + h) / h
+  // with A = M + h² K = L Lᵀ: W = L⁻¹ Jᵀ (forward solves only, each from its column's
+  // first entry), S = J A⁻¹ Jᵀ = Wᵀ W; J (v + Δv₀ − A⁻¹ Jᵀ μ) = −C(q, t + h) / h, and
+  // A⁻¹ Jᵀ μ = L⁻ᵀ (W μ): one backward solve
   const int n = static_cast<int>(dv.size());
   m_glue_y.resize(n, m);
-  Eigen::VectorXd column = Eigen::VectorXd::Zero(n), y;
+  Eigen::VectorXd column(n);
   for (int r = 0; r < m; ++r) {
-    for (const auto& [dof, value] : m_glue_rows[r]) column[dof] = value;
-    m_stiff.solve(column, y);
-    m_glue_y.col(r) = y;
-    for (const auto& [dof, value] : m_glue_rows[r]) column[dof] = 0;
+    column.setZero();
+    int first = n;
+    for (const auto& [dof, value] : m_glue_rows[r]) {
+      column[dof] = value;
+      first = std::min(first, dof);
+    }
+    m_stiff.forward(column, first);
+    m_glue_y.col(r) = column;
   }
-  Eigen::MatrixXd S(m, m);
+  const Eigen::MatrixXd S = m_glue_y.transpose() * m_glue_y;
   Eigen::VectorXd rhs(m);
   int offset = 0;
   for (const ConstraintGroup* group : m_solve_groups) {
@@ -344,18 +350,15 @@ void Simulator::hold_glues_in_solve(const State& s, double h, Eigen::VectorXd& d
   }
   for (int r = 0; r < m; ++r) {
     // J v⁺ over every coordinate of the row: a fixed one's v⁺ is known (the solve gave
-    // it its value), only the free ones' are corrected by Y μ
+    // it its value), only the free ones' are corrected by A⁻¹ Jᵀ μ
     double jv = 0;
     for (const auto& [dof, value] : m_glue_rows_all[r]) jv += value * (s.v[dof] + dv[dof]);
     rhs[r] = jv + m_glue_c[m_glue_row_of[r]] / h;
-    for (int k = 0; k < m; ++k) {
-      double sum = 0;
-      for (const auto& [dof, value] : m_glue_rows[r]) sum += value * m_glue_y(dof, k);
-      S(r, k) = sum;
-    }
   }
   m_glue_mu = S.ldlt().solve(rhs);
-  dv -= m_glue_y * m_glue_mu;
+  column = m_glue_y * m_glue_mu;
+  m_stiff.backward(column);
+  dv -= column;
 }
 
 void Simulator::record_solve_forces(const Eigen::VectorXd& q, double time, double h) {

@@ -169,7 +169,7 @@ class Simulator {
   std::vector<Eigen::Vector3d> m_solve_force, m_solve_torque;
   void record_solve_forces(const Eigen::VectorXd& q, double time, double h);
   Eigen::VectorXd m_glue_c;
-  Eigen::MatrixXd m_glue_y;  // (M + h² K)⁻¹ ∇Cᵀ
+  Eigen::MatrixXd m_glue_y;  // L⁻¹ ∇Cᵀ, with M + h² K = L Lᵀ
 };
 
 /// The default terms for a model's parameters (see Simulator(Model)).

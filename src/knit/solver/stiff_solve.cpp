@@ -71,14 +71,23 @@ void StiffSolver::solve(const Eigen::VectorXd& rhs, Eigen::VectorXd& x) const {
   // right-hand side (their own rows are the identity)
   for (const Coupling& c : m_fixed)
     for (const auto& [j, value] : c.entries) x[j] -= value * rhs[c.dof];
+  forward(x);
+  backward(x);
+}
+
+void StiffSolver::forward(Eigen::VectorXd& x, int first) const {
   const double* a = m_band.data();
   // L y = b
-  for (int j = 0; j < m_n; ++j) {
+  for (int j = std::max(0, first); j < m_n; ++j) {
     const double* col = a + static_cast<size_t>(j) * W;
     x[j] /= col[0];
     const int m = std::min(BAND, m_n - 1 - j);
     for (int r = 1; r <= m; ++r) x[j + r] -= col[r] * x[j];
   }
+}
+
+void StiffSolver::backward(Eigen::VectorXd& x) const {
+  const double* a = m_band.data();
   // Lᵀ x = y
   for (int j = m_n - 1; j >= 0; --j) {
     const double* col = a + static_cast<size_t>(j) * W;

@@ -31,6 +31,12 @@ class StiffSolver {
   /// Solves the factored system for `rhs` (size 3 × control points) into x. At a fixed
   /// coordinate rhs holds its given value, which x then has.
   void solve(const Eigen::VectorXd& rhs, Eigen::VectorXd& x) const;
+  /// The two halves of solve for a right-hand side that is zero at every fixed coordinate
+  /// (a constraint's column Jᵀ): forward solves L y = x in place, x zero before `first`
+  /// (the solve starts there, which a column near a yarn's end makes short); backward
+  /// solves Lᵀ x = y in place. A = L Lᵀ, so Jᵀ A⁻¹ J = Wᵀ W with W = L⁻¹ Jᵀ.
+  void forward(Eigen::VectorXd& x, int first = 0) const;
+  void backward(Eigen::VectorXd& x) const;
   /// The fixed coordinates given in factor, in order.
   const std::vector<int>& fixed() const { return m_fixed_dofs; }
   /// What the fixed coordinates' own rows of the original matrix leave over at x:
