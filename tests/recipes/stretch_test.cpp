@@ -136,7 +136,7 @@ TEST(Stretch, ARelativePathIsReadFromTheWorkingDirectory) {
   EXPECT_EQ(error, "");
 }
 
-// The quasi-static protocol: one sample at the end of every hold (after a hold at strain
+// The held protocol: one sample at the end of every hold (after a hold at strain
 // 0 and after each step of 0.1), the forces the clamps' static reactions there. Newton's
 // second law ties the two clamps together whether the sample has come to rest or not:
 // with gravity off the internal forces cancel, so the clamps' net force is Σ m a over the

@@ -4,11 +4,13 @@
 // rest of its potential energy, restarted at the start of each window, and outside them
 // applies the filters it wraps (non-rigid damping while the clamp moves).
 //
-// A quasi-static loading: move, hold until the forces balance, sample, move again. The
+// A loading in steps: move, hold until the forces (nearly) balance, sample, move again. The
 // damping filters' drag, which makes a continuous pull's force depend on its speed
 // (their rate α/h ≈ 8,000 /s), is off while the forces are measured: at rest it would be
 // zero anyway, so the equilibrium the hold reaches is the one the potential energy and
-// the constraints define.
+// the constraints define. (Whether there is one near the knit is another matter: a knit
+// relaxed with the relaxation parameters unravels under FIRE in the simulation ones, as
+// README's stretch tests show.)
 #include <memory>
 #include <vector>
 

@@ -125,7 +125,7 @@ nlohmann::json stretch_measures(const std::vector<StretchSample>& all, double to
   const double window = std::max(0.1 * to, 2 * hold_strain * (1 + 1e-9));
   // a continuous pull's small-strain slope leaves out the rest sample at strain 0: a
   // clamp that starts moving at speed meets the damping's drag at once, a jump that is
-  // not stiffness; the quasi-static curve's first sample is a rest like the others
+  // not stiffness; a held curve's first sample ends a hold like the others
   const double k0 = slope(curve, n, held ? -1e-12 : 1e-12, window, held);
   m["stiffness_small_strain"] = number_or_null(k0);
   m["stiffness_end"] = number_or_null(slope(curve, n, to - window, to, held));
@@ -215,7 +215,7 @@ nlohmann::json render_stretch(const std::string& out_dir, const std::vector<Stre
   std::vector<Image> panels;
   std::vector<std::string> labels;
   nlohmann::json shown = nlohmann::json::object();
-  // a quasi-static curve shows its rests (the unrelaxed start only if it has none)
+  // a held curve shows the ends of its holds (the unrelaxed start only if it has none)
   const bool held =
       std::any_of(curve.begin(), curve.end(), [](const StretchSample& s) { return s.equilibrium; });
   for (double e : render_strains(to)) {
@@ -338,7 +338,7 @@ void write_stretch_outputs(const StretchOptions& o, const std::vector<StretchSam
   write_stretch_csv(curve, (dir / "stretch.csv").string());
   if (!find_gnuplot().empty()) {
     PlotSeries fixed{"fixed clamp", {}, {}}, pulled{"moving clamp", {}, {}}, width{"width", {}, {}};
-    // a quasi-static curve is its rests
+    // a held curve is the ends of its holds
     const bool held = std::any_of(curve.begin(), curve.end(),
                                   [](const StretchSample& s) { return s.equilibrium; });
     for (const StretchSample& s : curve) {
@@ -442,7 +442,7 @@ StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions&
     s.time = state.time;
     const double moved = moving.pose(state.time).translation.dot(axis);
     s.strain = moved / result.initial_separation;
-    // the quasi-static curve: the static reactions, without the step's inertia
+    // a held curve: the static reactions, without the step's inertia and damping
     const ConstraintRecord* f = held ? data.static_constraint("fixed") : data.constraint("fixed");
     const ConstraintRecord* m = held ? data.static_constraint("moving") : data.constraint("moving");
     if (f) s.force_fixed = -f->force.dot(axis);
@@ -536,14 +536,14 @@ std::string plot_stretch_runs(const std::vector<std::string>& dirs, const std::s
       if (s.contains("model") && s["model"] == "sheet") {
         label += ", sheet";
       } else if (s.contains("protocol") && s["protocol"] == "hold") {
-        label += ", quasi-static";
+        label += ", held";
       } else if (s.contains("speed_cm_s") && s["speed_cm_s"].is_number()) {
         std::ostringstream speed;
         speed << std::setprecision(3) << s["speed_cm_s"].get<double>();
         label += ", " + speed.str() + " cm/s";
       }
     }
-    // a quasi-static run's curve is its rests (older runs have no such column)
+    // a held run's curve is the ends of its holds (older runs have no such column)
     const auto eq = std::find(t.columns.begin(), t.columns.end(), "equilibrium");
     const int e = eq == t.columns.end() ? -1 : static_cast<int>(eq - t.columns.begin());
     const bool held = e >= 0 && std::any_of(t.rows.begin(), t.rows.end(),

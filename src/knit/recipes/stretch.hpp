@@ -38,7 +38,7 @@ struct StretchOptions {
   double speed = 5.0;           ///< the moving clamp's speed (cm/s)
   int clamp_stitches = 2;       ///< columns, rows or corner size held by each clamp
   double output_strain = 0.01;  ///< a sample (and a written state) every this much strain
-  /// > 0: the quasi-static protocol. The clamp moves (at `speed`) in steps of this much
+  /// > 0: the held protocol. The clamp moves (at `speed`) in steps of this much
   /// strain and stands still for `hold_time` s after each (and once at strain 0 before the
   /// first), while FIRE relaxes the yarn to rest (filters/hold_relax.hpp); the curve is
   /// sampled at the end of each hold, with the clamps' static reactions
@@ -78,9 +78,9 @@ struct StretchSample {
   /// clamped edges are held flat, so a course pull shows the top and bottom edges' curl)
   double edge_curl = 0;
   /// The force residual at the sample (cm/s²; Simulator::force_residual), measured by the
-  /// quasi-static protocol; NaN otherwise.
+  /// held protocol; NaN otherwise.
   double force_residual = std::numeric_limits<double>::quiet_NaN();
-  /// A sample at the end of a hold (the quasi-static protocol's curve); false for the
+  /// A sample at the end of a hold (the held protocol's curve); false for the
   /// unrelaxed start and for every sample of a continuous pull.
   bool equilibrium = false;
 };
@@ -144,7 +144,7 @@ StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions&
 /// pull reaches three times the small-strain slope; null if never), work_erg (∫ F dx of the moving
 /// clamp over the whole run), max_force_dyn, width_change (width at the end of the pull over the
 /// initial width, − 1).
-/// With hold_strain > 0 (the quasi-static protocol) only the equilibrium samples count, the
+/// With hold_strain > 0 (the held protocol) only the samples at the holds' ends count, the
 /// rest sample at strain 0 among them (it has no drag), and each window spans at least two
 /// holds.
 nlohmann::json stretch_measures(const std::vector<StretchSample>& curve, double to_strain,
