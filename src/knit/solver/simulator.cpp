@@ -364,13 +364,17 @@ void Simulator::hold_glues_in_solve(const State& s, double h, Eigen::VectorXd& d
 void Simulator::record_solve_forces(const Eigen::VectorXd& q, double time, double h) {
   for (auto& f : m_solve_force) f.setZero();
   for (auto& t : m_solve_torque) t.setZero();
+  if (m_fixed_dofs.empty() && m_glue_rows.empty()) return;
+  // each group's torque point, once per step (a clamp's comes from its keyframes)
+  m_solve_about.resize(m_solve_force.size());
+  for (size_t g = 0; g < m_solve_about.size(); ++g)
+    m_solve_about[g] = m_model.constraint_groups[g]->torque_point(m_model, q, time);
   auto add = [&](int g, int dof, double f) {
     if (g < 0) return;
     Eigen::Vector3d force = Eigen::Vector3d::Zero();
     force[dof % 3] = f;
     m_solve_force[g] += force;
-    const Eigen::Vector3d about = m_model.constraint_groups[g]->torque_point(m_model, q, time);
-    m_solve_torque[g] += (q.segment<3>(dof - dof % 3) - about).cross(force);
+    m_solve_torque[g] += (q.segment<3>(dof - dof % 3) - m_solve_about[g]).cross(force);
   };
   // the clamps: what held their control points to the given velocities
   m_stiff.fixed_residuals(m_dv, m_b_fixed, m_fixed_residual);

@@ -166,7 +166,7 @@ class Simulator {
   std::vector<int> m_fixed_group;                     // the clamp of each fixed coordinate
   std::vector<double> m_b_fixed, m_fixed_residual;
   // what the solve's constraints exerted in the last IMEX step, per constraint group
-  std::vector<Eigen::Vector3d> m_solve_force, m_solve_torque;
+  std::vector<Eigen::Vector3d> m_solve_force, m_solve_torque, m_solve_about;
   void record_solve_forces(const Eigen::VectorXd& q, double time, double h);
   Eigen::VectorXd m_glue_c;
   Eigen::MatrixXd m_glue_y;  // L⁻¹ ∇Cᵀ, with M + h² K = L Lᵀ
