@@ -130,6 +130,11 @@ TEST(StepData, ContactSetMatchesThePointPairs) {
       for (int b = 0; b < quad.size(); ++b)
         best = std::min(best, (combine(xj, quad.b[b]) - combine(xi, quad.b[a])).norm() / two_r);
     EXPECT_NEAR(p.d, best, 1e-12);
+    // and the pair is found at its curve parameters
+    const Eigen::Vector3d delta =
+        combine(xj, bspline_basis(p.t_j)) - combine(xi, bspline_basis(p.t_i));
+    EXPECT_NEAR(delta.norm() / two_r, p.d, 1e-12);
+    EXPECT_NEAR((delta.normalized() - p.normal).norm(), 0.0, 1e-9);
   }
   EXPECT_EQ(got, want);
   EXPECT_DOUBLE_EQ(min_d, c.min_distance_ratio);

@@ -60,6 +60,7 @@ void ContactTerm::resize(const Model& model) {
   // LANES spare entries at the end: the culling reads whole vectors of points
   for (auto* a : {&m_px, &m_py, &m_pz, &m_vx, &m_vy, &m_vz}) a->assign(n + LANES, 0.0);
   m_basis.resize(m_points);
+  m_abscissae = model.contact_quad.t;
   for (int a = 0; a < m_points; ++a)
     for (int c = 0; c < 4; ++c) m_basis[a][c] = model.contact_quad.b[a][c];
   m_boxes.assign(m_num_seg, Aabb{});
@@ -223,6 +224,8 @@ void ContactTerm::pair_kernel(const Model& model, int i, int j, RowStats& row) {
   const VecD zero = splat(0.0), one = splat(1.0), two = splat(2.0);
   VecD energy = zero, min_d2 = splat(std::numeric_limits<double>::infinity());
   VecD mdx = zero, mdy = zero, mdz = zero;  // Δy of the closest point pair, lane-wise
+  VecD mda = zero, mdb = zero;              // and its points (a, and b's index kb + lane)
+  const VecD lane_index = {0.0, 1.0, 2.0, 3.0};
   VecL contacts = VecL{};
   for (int ka = 0; ka < na; ++ka) {
     const int a = ia[ka];
@@ -273,6 +276,8 @@ void ContactTerm::pair_kernel(const Model& model, int i, int j, RowStats& row) {
       mdx = closer ? dx : mdx;
       mdy = closer ? dy : mdy;
       mdz = closer ? dz : mdz;
+      mda = closer ? splat(a) : mda;
+      mdb = closer ? splat(kb) + lane_index : mdb;
       min_d2 = closer ? d2 : min_d2;
       store(fbx + kb, load(fbx + kb) + fx);
       store(fby + kb, load(fby + kb) + fy);
@@ -311,6 +316,8 @@ void ContactTerm::pair_kernel(const Model& model, int i, int j, RowStats& row) {
   for (int l = 0; l < LANES; ++l)
     if (min_d2[l] == lane_min) {
       pf.delta = Eigen::Vector3d(mdx[l], mdy[l], mdz[l]);
+      pf.point_a = static_cast<int>(mda[l]);
+      pf.point_b = jb[static_cast<int>(mdb[l])];
       break;
     }
   for (int c = 0; c < 4; ++c) {
@@ -475,6 +482,8 @@ void ContactTerm::record(StepData& data) const {
         Eigen::Vector3d net = Eigen::Vector3d::Zero();
         for (int a = 0; a < 4; ++a) net += pf.force_j.segment<3>(3 * a);
         r.normal_force = r.normal.dot(net);
+        r.t_i = m_abscissae[pf.point_a];
+        r.t_j = m_abscissae[pf.point_b];
       }
     }
   });

@@ -139,8 +139,9 @@ class ContactTerm : public Term {
   struct PairForce {
     int j = 0;
     Vector12d force_i, force_j;
-    double min_d2 = 0;      // smallest squared distance of a point pair in contact (cm²)
-    Eigen::Vector3d delta;  // y_j − y_i at that point pair (cm)
+    double min_d2 = 0;             // smallest squared distance of a point pair in contact (cm²)
+    Eigen::Vector3d delta;         // y_j − y_i at that point pair (cm)
+    int point_a = 0, point_b = 0;  // its contact points on i and on j
   };
   // per-segment (row) outputs of the kernel stage
   struct RowStats {
@@ -168,6 +169,7 @@ class ContactTerm : public Term {
   // contact points and velocities, structure of arrays, index segment·P + a
   std::vector<double> m_px, m_py, m_pz, m_vx, m_vy, m_vz;
   std::vector<std::array<double, 4>> m_basis;  // B_0..3(t_a) per contact point
+  std::vector<double> m_abscissae;             // t_a per contact point
   std::vector<Aabb> m_boxes;
   Bvh m_bvh;
   std::vector<std::vector<int>> m_partners;  // per segment: candidates, sorted

@@ -24,6 +24,10 @@ int HoldRelaxFilter::window_at(double time) const {
   return static_cast<int>(it - m_windows.begin());
 }
 
+void HoldRelaxFilter::begin_step(const StepData& start, const Eigen::VectorXd& q_start) {
+  for (auto& f : m_outside) f->begin_step(start, q_start);
+}
+
 void HoldRelaxFilter::apply(const Model& model, const Eigen::VectorXd& q, Eigen::VectorXd& v,
                             double time, double h) {
   const int w = window_at(time);

@@ -26,6 +26,7 @@ class HoldRelaxFilter : public VelocityFilter {
                   std::vector<std::pair<double, double>> windows);
 
   std::string_view name() const override { return "hold_relax"; }
+  void begin_step(const StepData& start, const Eigen::VectorXd& q_start) override;
   void apply(const Model& model, const Eigen::VectorXd& q, Eigen::VectorXd& v, double time,
              double h) override;
   bool adjust_positions(const Model& model, Eigen::VectorXd& q) const override;

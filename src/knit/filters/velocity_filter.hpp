@@ -14,6 +14,12 @@ class VelocityFilter {
   virtual ~VelocityFilter() = default;
   /// Short stable name used in timings ("nonrigid_damping", "collisions").
   virtual std::string_view name() const = 0;
+  /// Called by the simulator before each apply with the state the step started from: its
+  /// positions and its records (StepData's force records: the contact set with its normal
+  /// forces, the objects). A filter that acts on what the forces found or on how far the
+  /// step moved keeps what it needs (yarn–yarn friction: the contact pairs and where they
+  /// were); the default ignores them.
+  virtual void begin_step(const StepData& start, const Eigen::VectorXd& q_start) {}
   /// Changes the control-point velocities `v` (cm/s) of positions `q` (cm) at `time` (s),
   /// the end of a step of length `h` (s; a filter that removes a penetration over the next
   /// step needs it). Every impulse of one filter is computed from the same velocities,

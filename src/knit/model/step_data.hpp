@@ -33,6 +33,9 @@ struct ContactPairRecord {
   /// normal component of the contact force (elastic + damping, dyn) that segment i exerts
   /// on segment j, normal · Σ F_j; positive when it pushes the yarns apart
   double normal_force = 0;
+  /// the curve parameters of that closest point pair on segment i and on segment j (its
+  /// contact quadrature abscissae, in [0, 1]): y_j(t_j) − y_i(t_i) = 2r d · normal
+  double t_i = 0, t_j = 0;
 };
 
 /// Yarn–yarn contact at the recorded state (absent when contact is off).

@@ -440,6 +440,8 @@ StepResult Simulator::step(State& state, double h) {
     res.message = msg.str();
     return res;
   }
+  // the filters see where the step started: the force records still describe it
+  for (auto& f : m_filters) f->begin_step(m_data, state.q);
   apply_filters(m_qnew, m_vnew, t_new, h);
   bool moved = false;
   for (const auto& f : m_filters) moved = f->adjust_positions(m_model, m_qnew) || moved;

@@ -101,7 +101,8 @@ class Simulator {
   /// run whose initial state may violate them (e.g. glued yarn ends laid a yarn diameter
   /// from the point they are glued to).
   ProjectionResult satisfy_constraints(State& state);
-  /// Stage 3: every velocity filter in order, at the end (`time`) of a step of length h.
+  /// Stage 3: every velocity filter in order, at the end (`time`) of a step of length h
+  /// (step() first shows each the step's start: begin_step).
   void apply_filters(const Eigen::VectorXd& q, Eigen::VectorXd& v, double time, double h);
 
   /// The force residual at `state` (cm/s²): the net static force per unit mass that the
