@@ -90,6 +90,11 @@ void register_stretch(CLI::App& app) {
   cmd->add_option("--alpha-large", o->stretch.params.material.alpha_large,
                   "non-rigid damping of the large regions per step (default 0.3)")
       ->check(finite_range(0, 1));
+  cmd->add_option("--yarn-friction", o->stretch.params.material.yarn_friction,
+                  "yarn–yarn Coulomb friction coefficient (default 0: the paper's model, "
+                  "viscous contact damping only)")
+      ->check(finite_range(knit::param_range("yarn_friction").min,
+                           knit::param_range("yarn_friction").max));
   cmd->add_option("--rows", o->relax.knit.rows, "rows of the PATTERN's sample")
       ->check(CLI::Range(2, 1'000'000));
   cmd->add_option("--cols", o->relax.knit.cols, "stitches per row of the PATTERN's sample")
@@ -122,13 +127,14 @@ void register_stretch(CLI::App& app) {
     if (cmd->count("--time-step")) o->stretch.params.solver.time_step = o->time_step;
     if (cmd->count("--integrator"))
       o->stretch.params.solver.integrator = knit::parse_integrator(o->integrator);
-    if (o->use_sheet &&
-        (cmd->count("--hold") + cmd->count("--hold-time") + cmd->count("--hold-damped") +
-             cmd->count("--time-step") + cmd->count("--integrator") >
-         0))
+    if (o->use_sheet && (cmd->count("--hold") + cmd->count("--hold-time") +
+                             cmd->count("--hold-damped") + cmd->count("--time-step") +
+                             cmd->count("--integrator") + cmd->count("--yarn-friction") >
+                         0))
       throw std::invalid_argument(
           "stretch --sheet: the sheet is pulled through equilibria already; --hold, "
-          "--hold-time, --hold-damped, --time-step and --integrator are for the yarn model");
+          "--hold-time, --hold-damped, --time-step, --integrator and --yarn-friction are for "
+          "the yarn model");
     if ((cmd->count("--hold-time") || o->stretch.hold_damped) && !cmd->count("--hold"))
       throw std::invalid_argument("stretch: --hold-time and --hold-damped need --hold");
     o->stretch.out_dir = o->out;

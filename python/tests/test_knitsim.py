@@ -190,6 +190,14 @@ def test_stretch_with_held_clamps_samples_the_holds(saved_knit):
     assert all(curve["force_residual"] >= 0)
 
 
+def test_stretch_takes_parameters_such_as_yarn_friction(saved_knit):
+    r = knitsim.stretch(saved_knit, to=0.02, params={"yarn_friction": 0.3})
+    assert r["status"] == "ok"
+    assert r["curve"]["force_moving"][-1] > 0
+    with pytest.raises(ValueError, match="yarn_friction"):
+        knitsim.stretch(saved_knit, to=0.02, params={"yarn_friction": -1})
+
+
 def test_errors_are_the_librarys_messages(tmp_path):
     with pytest.raises(ValueError, match="not a built-in pattern"):
         knitsim.relax("no_such_pattern", rows=4, cols=4)

@@ -460,6 +460,9 @@ TEST(Cli, SheetStretchRefusesBadRequestsAndRuns) {
   r = run("stretch --from " + knit + " --sheet --hold 0.05 --out " + dir);
   EXPECT_EQ(r.code, 1);
   EXPECT_NE(r.output.find("--hold"), std::string::npos) << r.output;
+  r = run("stretch --from " + knit + " --sheet --yarn-friction 0.3 --out " + dir);
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.output.find("--yarn-friction"), std::string::npos) << r.output;
   r = run("stretch --from " + knit + " --hold-time 0.2 --out " + dir);
   EXPECT_EQ(r.code, 1);
   EXPECT_NE(r.output.find("need --hold"), std::string::npos) << r.output;

@@ -64,6 +64,9 @@ TEST(SceneErrors, NegativeOrNonFiniteParametersAreRejected) {
   expect_error(scene_with(R"(, "params": {"radius": 0})"), {"params.radius", "positive"});
   expect_error(scene_with(R"(, "time_step": -0.001)"), {"time_step", "positive"});
   expect_error(scene_with(R"(, "params": {"alpha_small": 1.5})"), {"params.alpha_small", "[0, 1]"});
+  expect_error(scene_with(R"(, "params": {"yarn_friction": -0.3})"),
+               {"params.yarn_friction", "non-negative"});
+  expect_error(scene_with(R"(, "params": {"yarn_friction": 30})"), {"yarn_friction", "[0, 10]"});
   expect_error(scene_with(R"(, "params": {"k_len": "stiff"})"), {"params.k_len", "number"});
   expect_error(scene_with(R"(, "params": {"integrator": "implicit"})"),
                {"params.integrator", "\"explicit\" or \"imex\"", "implicit"});

@@ -20,6 +20,7 @@ const std::vector<ParamRange>& param_ranges() {
       {"k_dn", 0, 1e6, "g/(cm² s)"},
       {"alpha_small", 0, 1, ""},
       {"alpha_large", 0, 1, ""},
+      {"yarn_friction", 0, 10, ""},
       {"quadrature_points", 3, 101, "points per segment"},
       {"contact_points", 1, 64, "points per segment"},
       {"time_step", 1e-8, 1e-2, "s"},
@@ -74,6 +75,7 @@ void validate_params(const Params& p) {
   check_param("k_dn", m.k_dn);
   check_param("alpha_small", m.alpha_small);
   check_param("alpha_large", m.alpha_large);
+  check_param("yarn_friction", m.yarn_friction);
   check_param("quadrature_points", p.discretisation.quadrature_points);
   if (p.discretisation.quadrature_points % 2 == 0)
     throw std::invalid_argument(

@@ -25,6 +25,9 @@ struct Material {
                                ///< 1/11800 s (a rate: per_step_strength)
   double alpha_large = 0.3;    ///< non-rigid damping, large regions, the same
   bool contact = true;         ///< yarn–yarn contact on/off
+  /// yarn–yarn Coulomb friction coefficient μ (filters/yarn_friction.hpp; not in the
+  /// paper's model, whose only friction is the viscous contact damping): 0 = off
+  double yarn_friction = 0;
 };
 
 /// Sampling of each spline segment.

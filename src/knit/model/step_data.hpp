@@ -84,6 +84,19 @@ struct ConstraintRecord {
   double max_violation = 0;                         ///< max |C| over the rows after the step
 };
 
+/// What yarn–yarn friction (filters/yarn_friction.hpp) did in the last step.
+struct FrictionRecord {
+  bool present = false;  ///< whether the simulation has yarn–yarn friction
+  long long pairs = 0;   ///< segment pairs it acted on (the contact set of the step's start)
+  long long stuck = 0;   ///< of them, those it stopped sliding (inside their cones)
+  /// energy it dissipated over the step (erg, ≥ 0): Σ −λ · u_t over the pairs, each
+  /// impulse times the sliding rate it left (0 for a pair it stopped)
+  double work = 0;
+  /// Σ |λ| / h over the pairs (dyn): the total friction force magnitude over the step
+  double force = 0;
+  int passes = 0;  ///< Gauss–Seidel sweeps it needed
+};
+
 /// The last projection.
 struct ProjectionRecord {
   bool converged = true;
@@ -113,6 +126,7 @@ struct StepData {
   // --- step records, of the step that produced it
   ProjectionRecord projection;
   std::vector<ConstraintRecord> constraints;
+  FrictionRecord friction;
   /// wall seconds per stage, summed since the simulator's timings were reset: each term's
   /// name, "projection", each filter's name, "record"
   std::map<std::string, double> stage_seconds;

@@ -1,6 +1,7 @@
 #include "knit/recipes/simulate_scene.hpp"
 
 #include "knit/filters/nonrigid_damping.hpp"
+#include "knit/filters/yarn_friction.hpp"
 #include "knit/io/run_dir.hpp"
 #include "knit/objects/collision_filter.hpp"
 #include "knit/objects/object.hpp"
@@ -16,6 +17,9 @@ std::vector<std::unique_ptr<VelocityFilter>> scene_filters(const Scene& scene, c
   if (std::any_of(scene.model.objects.begin(), scene.model.objects.end(),
                   [](const auto& o) { return o->filter; }))
     filters.push_back(std::make_unique<CollisionFilter>(model));
+  // friction after the collisions: it reads the normal forces of the step's start
+  if (m.contact && m.yarn_friction > 0)
+    filters.push_back(std::make_unique<YarnFrictionFilter>(m.yarn_friction));
   return filters;
 }
 

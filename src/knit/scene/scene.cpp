@@ -322,10 +322,26 @@ Scene parse_scene_file(const nlohmann::json& doc, const std::string& path) {
 }  // namespace
 
 Params parse_params(const JsonReader& r, Params p) {
-  r.allow_keys({"preset", "radius", "density", "k_len", "k_bend", "k_global", "k_contact", "k_dt",
-                "k_dn", "alpha_small", "alpha_large", "quadrature_points", "contact_points",
-                "length_constraints", "contact", "constraint_tolerance",
-                "max_projection_iterations", "time_step", "integrator"});
+  r.allow_keys({"preset",
+                "radius",
+                "density",
+                "k_len",
+                "k_bend",
+                "k_global",
+                "k_contact",
+                "k_dt",
+                "k_dn",
+                "alpha_small",
+                "alpha_large",
+                "yarn_friction",
+                "quadrature_points",
+                "contact_points",
+                "length_constraints",
+                "contact",
+                "constraint_tolerance",
+                "max_projection_iterations",
+                "time_step",
+                "integrator"});
   if (r.has("preset")) {
     const std::string preset = r.at("preset").string();
     if (preset == "simulation")
@@ -343,6 +359,7 @@ Params parse_params(const JsonReader& r, Params p) {
   if (r.has("k_contact")) p.material.k_contact = r.at("k_contact").positive(true);
   if (r.has("k_dt")) p.material.k_dt = r.at("k_dt").positive(true);
   if (r.has("k_dn")) p.material.k_dn = r.at("k_dn").positive(true);
+  if (r.has("yarn_friction")) p.material.yarn_friction = r.at("yarn_friction").positive(true);
   for (auto [key, dst] : {std::pair{"alpha_small", &p.material.alpha_small},
                           {"alpha_large", &p.material.alpha_large}}) {
     if (!r.has(key)) continue;

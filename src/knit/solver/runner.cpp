@@ -124,6 +124,7 @@ nlohmann::json params_json(const Params& p) {
             {"k_dn", m.k_dn},
             {"alpha_small", m.alpha_small},
             {"alpha_large", m.alpha_large},
+            {"yarn_friction", m.yarn_friction},
             {"contact", m.contact}}},
           {"discretisation",
            {{"quadrature_points", p.discretisation.quadrature_points},
@@ -308,6 +309,13 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
   long long contact_samples = 0;
   double min_d = std::numeric_limits<double>::infinity();
   std::map<std::string, long long> warnings;
+  // yarn–yarn friction over the run: pairs and stuck pairs summed over steps, energy
+  // dissipated, sweeps
+  struct {
+    long long steps = 0, pairs = 0, stuck = 0, passes = 0;
+    int passes_max = 0;
+    double work = 0;
+  } friction;
   // per object: deepest penetration over the run (cm) and the mean of its contact points
   std::vector<double> object_deepest(model.objects.size(), 0.0),
       object_points(model.objects.size(), 0.0);
@@ -395,6 +403,14 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
       object_points[o] += static_cast<double>(data.objects[o].points_in_contact);
     }
     for (const std::string& w : data.warnings) ++warnings[w.substr(0, w.find(" ("))];
+    if (data.friction.present) {
+      ++friction.steps;
+      friction.pairs += data.friction.pairs;
+      friction.stuck += data.friction.stuck;
+      friction.passes += data.friction.passes;
+      friction.passes_max = std::max(friction.passes_max, data.friction.passes);
+      friction.work += data.friction.work;
+    }
     signal = interrupt_signal();
     const bool last = next_step_length(state.time, end_time, h) == 0;
     if (step_index % opt.output_every == 0 || last || signal != 0) {
@@ -486,6 +502,17 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
     s["min_contact_distance"] = finite_or_null(min_d);
   }
   s["constraint_forces"] = constraint_forces_json(data);
+  if (friction.steps > 0) {
+    const double n = static_cast<double>(friction.steps);
+    s["yarn_friction"] = {
+        {"pairs_mean", friction.pairs / n},
+        {"stuck_fraction", friction.pairs > 0 ? static_cast<double>(friction.stuck) /
+                                                    static_cast<double>(friction.pairs)
+                                              : 0.0},
+        {"work_erg", friction.work},
+        {"passes_mean", friction.passes / n},
+        {"passes_max", friction.passes_max}};
+  }
   if (!model.objects.empty()) {
     nlohmann::json objects = nlohmann::json::object();
     for (size_t o = 0; o < model.objects.size(); ++o) {
