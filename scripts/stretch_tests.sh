@@ -8,14 +8,18 @@
 # interruption. Long (about an hour at 12×12 on 2 cores): run it in the background, e.g.
 #   nohup scripts/stretch_tests.sh > out/stretch.log 2>&1 &
 # Usage: scripts/stretch_tests.sh [--rows R] [--cols C] [--speed V] [--to E] [--wale-to E]
-#                                 [--threads N]
+#                                 [--threads N] [--friction MU]
 # --to is the strain of the course and bias pulls (default 1), --wale-to the wale pull's
 # (default 0.6: a stockinette's loops jam at about 0.8 along the wale, where the
 # inextensible yarn stops the pull and the run ends unstable). A run that ends unstable
 # keeps its curve up to there and is not repeated.
+# --friction MU: the yarn runs with yarn–yarn Coulomb friction MU in place of the non-rigid
+# damping filter (--yarn-friction MU --alpha-small 0 --alpha-large 0), whose curves do not
+# depend on the pulling speed; they and their sheets go to out/stretch/RxC/friction_MU
+# (the relaxations are shared).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-rows=12 cols=12 speed=1 to=1.0 wale_to=0.6 threads=0
+rows=12 cols=12 speed=1 to=1.0 wale_to=0.6 threads=0 friction=
 while [ $# -gt 0 ]; do
   case $1 in
     --rows) rows=$2; shift 2 ;;
@@ -24,12 +28,19 @@ while [ $# -gt 0 ]; do
     --to) to=$2; shift 2 ;;
     --wale-to) wale_to=$2; shift 2 ;;
     --threads) threads=$2; shift 2 ;;
+    --friction) friction=$2; shift 2 ;;
     *) echo "stretch_tests: unknown option '$1'" >&2; exit 2 ;;
   esac
 done
 [ -x build/knitsim ] || scripts/setup.sh
 k=./build/knitsim
-root=out/stretch/${rows}x${cols}
+relaxed=out/stretch/${rows}x${cols}
+root=$relaxed
+yarn=()
+if [ -n "$friction" ]; then
+  root=$relaxed/friction_$friction
+  yarn=(--yarn-friction "$friction" --alpha-small 0 --alpha-large 0)
+fi
 mkdir -p "$root"
 done_ok() { [ -f "$1/summary.json" ] && grep -q '"status": "ok"' "$1/summary.json"; }
 # a run that ended (ok or unstable) and wrote its curve; an interrupted one goes again
@@ -37,7 +48,7 @@ ended() { [ -f "$1/stretch.csv" ] && ! grep -q '"status": "interrupted"' "$1/sum
 strain_of() { if [ "$1" = wale ]; then echo "$wale_to"; else echo "$to"; fi; }
 
 for p in stockinette garter rib2x2; do
-  relax=$root/${p}_relax
+  relax=$relaxed/${p}_relax
   if [ ! -f "$relax/final.kstate" ] || ! done_ok "$relax"; then
     $k relax $p --rows "$rows" --cols "$cols" --max-time 1 -j "$threads" -q --overwrite --out "$relax"
   fi
@@ -46,15 +57,15 @@ for p in stockinette garter rib2x2; do
   for d in course wale bias; do
     run=$root/${p}_$d
     ended "$run" || $k stretch --from "$knit" --direction $d --to "$(strain_of $d)" \
-      --speed "$speed" -j "$threads" -q --overwrite --out "$run" || true
+      --speed "$speed" "${yarn[@]}" -j "$threads" -q --overwrite --out "$run" || true
   done
 done
 
 # the sheet: fitted once to the stockinette (its course run does the fit), then given
 # every knit's geometry with the fitted stiffnesses
 fit=$root/stockinette_course,$root/stockinette_wale,$root/stockinette_bias
-knit=$root/stockinette_relax/relaxed.kstate
-[ -f "$knit" ] || knit=$root/stockinette_relax/final.kstate
+knit=$relaxed/stockinette_relax/relaxed.kstate
+[ -f "$knit" ] || knit=$relaxed/stockinette_relax/final.kstate
 first=$root/stockinette_course_sheet
 ended "$first" || $k stretch --from "$knit" --sheet --fit "$fit" --direction course --to "$to" \
   --speed "$speed" -q --overwrite --out "$first"
@@ -62,8 +73,8 @@ fitted() { grep -o "\"$1\": [0-9.e+-]*" "$first/summary.json" | head -n 1 | cut 
 material=(--k-course "$(fitted k_stretch_u_dyn_per_cm)" --k-wale "$(fitted k_stretch_v_dyn_per_cm)"
           --k-shear "$(fitted k_shear_dyn_per_cm)")
 for p in stockinette garter rib2x2; do
-  knit=$root/${p}_relax/relaxed.kstate
-  [ -f "$knit" ] || knit=$root/${p}_relax/final.kstate
+  knit=$relaxed/${p}_relax/relaxed.kstate
+  [ -f "$knit" ] || knit=$relaxed/${p}_relax/final.kstate
   for d in course wale bias; do
     run=$root/${p}_${d}_sheet
     ended "$run" || $k stretch --from "$knit" --sheet "${material[@]}" --direction $d \
