@@ -84,6 +84,7 @@ inline double now_s() {
 #include <memory>
 
 #include "knit/filters/nonrigid_damping.hpp"
+#include "knit/filters/yarn_friction.hpp"
 #include "knit/io/state_file.hpp"
 #include "knit/pattern/generator.hpp"
 #include "knit/pattern/pattern.hpp"
@@ -112,9 +113,10 @@ struct StepSetup {
 };
 
 inline StepSetup make_step_setup(const std::string& pattern, int rows, int cols, int contact_points,
-                                 const std::string& state_path = "") {
+                                 const std::string& state_path = "", double yarn_friction = 0) {
   Params p = Params::simulation();
   p.discretisation.contact_points = contact_points;
+  p.material.yarn_friction = yarn_friction;
   StepSetup s;
   s.pattern = pattern;
   s.rows = rows;
@@ -139,6 +141,7 @@ inline StepSetup make_step_setup(const std::string& pattern, int rows, int cols,
     s.sim = std::make_unique<Simulator>(model);
     s.sim->add_filter(std::make_unique<NonRigidDampingFilter>(model, p.material.alpha_small,
                                                               p.material.alpha_large));
+    if (yarn_friction > 0) s.sim->add_filter(std::make_unique<YarnFrictionFilter>(yarn_friction));
     s.state.q =
         Eigen::Map<const Eigen::VectorXd>(knit.control_points.data(), knit.control_points.size());
     s.state.v = Eigen::VectorXd::Zero(s.state.q.size());
