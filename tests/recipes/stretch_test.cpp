@@ -119,6 +119,23 @@ TEST(Stretch, WaleAndBiasPullAlongTheirAxes) {
   }
 }
 
+// with yarn friction asked for, the pull runs the friction filter: it acts on the clamped
+// knit's contacts (most of which stick during a slow pull), and the summary says so
+TEST(Stretch, YarnFrictionActsOnTheKnitsContacts) {
+  StretchOptions o;
+  o.to_strain = 0.05;
+  o.speed = 1;
+  o.progress = false;
+  o.params.material.yarn_friction = 0.3;
+  const StretchResult r = stretch_knit(relaxed_sample(), o);
+  ASSERT_EQ(r.report.summary["status"], "ok");
+  const auto& f = r.report.summary["yarn_friction"];
+  EXPECT_GT(f["pairs_mean"].get<double>(), 50.0) << f.dump();
+  EXPECT_GT(f["stuck_fraction"].get<double>(), 0.5) << f.dump();
+  EXPECT_GT(f["work_erg"].get<double>(), 0.0) << f.dump();
+  EXPECT_EQ(r.report.summary["params"]["material"]["yarn_friction"].get<double>(), 0.3);
+}
+
 // --from a relative path is read from the working directory (not from beside itself)
 TEST(Stretch, ARelativePathIsReadFromTheWorkingDirectory) {
   const fs::path sample = relaxed_sample(), cwd = fs::current_path();
