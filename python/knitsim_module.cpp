@@ -119,7 +119,7 @@ Params params_over(const Params& base, const py::object& overrides, const char* 
 py::dict contact_dict(const ContactRecord& c) {
   const auto n = static_cast<py::ssize_t>(c.pairs.size());
   py::array_t<int> seg_i(n), seg_j(n);
-  py::array_t<double> d(n), force(n), normal({n, py::ssize_t{3}});
+  py::array_t<double> d(n), force(n), t_i(n), t_j(n), normal({n, py::ssize_t{3}});
   auto nm = normal.mutable_unchecked<2>();
   for (py::ssize_t k = 0; k < n; ++k) {
     const ContactPairRecord& p = c.pairs[k];
@@ -127,13 +127,16 @@ py::dict contact_dict(const ContactRecord& c) {
     seg_j.mutable_at(k) = p.seg_j;
     d.mutable_at(k) = p.d;
     force.mutable_at(k) = p.normal_force;
+    t_i.mutable_at(k) = p.t_i;
+    t_j.mutable_at(k) = p.t_j;
     for (int a = 0; a < 3; ++a) nm(k, a) = p.normal[a];
   }
   return py::dict("present"_a = c.present, "candidate_segment_pairs"_a = c.candidate_segment_pairs,
                   "point_pairs_tested"_a = c.point_pairs_tested,
                   "point_pairs_in_contact"_a = c.point_pairs_in_contact,
                   "min_distance_ratio"_a = c.min_distance_ratio, "seg_i"_a = seg_i,
-                  "seg_j"_a = seg_j, "d"_a = d, "normal"_a = normal, "normal_force"_a = force);
+                  "seg_j"_a = seg_j, "d"_a = d, "normal"_a = normal, "normal_force"_a = force,
+                  "t_i"_a = t_i, "t_j"_a = t_j);
 }
 
 // StepData as plain Python values: numbers, dicts and numpy arrays
@@ -158,15 +161,19 @@ py::dict step_data_dict(const StepData& s) {
     objects.append(py::dict("name"_a = o.name, "points_in_contact"_a = o.points_in_contact,
                             "deepest_penetration"_a = o.deepest_penetration,
                             "force"_a = vec3(o.force)));
-  return py::dict("steps"_a = s.steps, "time"_a = s.time, "kinetic_energy"_a = s.kinetic_energy,
-                  "potential_energy"_a = s.potential_energy, "energies"_a = energies,
-                  "term_forces"_a = term_forces, "contact"_a = contact_dict(s.contact),
-                  "objects"_a = objects, "max_violation"_a = s.max_violation,
-                  "projection"_a = py::dict("converged"_a = s.projection.converged,
-                                            "iterations"_a = s.projection.iterations,
-                                            "residual"_a = s.projection.residual),
-                  "constraints"_a = constraints, "stage_seconds"_a = stages,
-                  "warnings"_a = s.warnings);
+  return py::dict(
+      "steps"_a = s.steps, "time"_a = s.time, "kinetic_energy"_a = s.kinetic_energy,
+      "potential_energy"_a = s.potential_energy, "energies"_a = energies,
+      "term_forces"_a = term_forces, "contact"_a = contact_dict(s.contact), "objects"_a = objects,
+      "max_violation"_a = s.max_violation,
+      "projection"_a =
+          py::dict("converged"_a = s.projection.converged, "iterations"_a = s.projection.iterations,
+                   "residual"_a = s.projection.residual),
+      "constraints"_a = constraints,
+      "friction"_a = py::dict("present"_a = s.friction.present, "pairs"_a = s.friction.pairs,
+                              "stuck"_a = s.friction.stuck, "work"_a = s.friction.work,
+                              "force"_a = s.friction.force, "passes"_a = s.friction.passes),
+      "stage_seconds"_a = stages, "warnings"_a = s.warnings);
 }
 
 // ---------------------------------------------------------------- runs

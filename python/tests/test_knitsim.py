@@ -160,6 +160,8 @@ def test_contact_set_reads_as_arrays(small_knit):
     assert ((c["d"] > 0) & (c["d"] < 1)).all()
     assert np.allclose(np.linalg.norm(c["normal"], axis=1), 1.0)
     assert c["min_distance_ratio"] <= c["d"].min() + 1e-12
+    assert ((c["t_i"] >= 0) & (c["t_i"] <= 1) & (c["t_j"] >= 0) & (c["t_j"] <= 1)).all()
+    assert not sim.data["friction"]["present"]  # no yarn friction asked for
 
 
 @pytest.fixture
