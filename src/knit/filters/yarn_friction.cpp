@@ -77,7 +77,8 @@ void YarnFrictionFilter::apply(const Model& model, const Eigen::VectorXd& q, Eig
     for (int k = 0; k < co.n; ++k) {
       row.cp[k] = co.cp[k];
       row.c[k] = co.c[k];
-      row.inv_m += co.c[k] * co.c[k] / model.mass[co.cp[k]];
+      row.cm[k] = co.c[k] / model.mass[co.cp[k]];
+      row.inv_m += co.c[k] * row.cm[k];
     }
     if (!(row.inv_m > 0)) continue;
     row.bound = bound;
@@ -100,8 +101,7 @@ void YarnFrictionFilter::apply(const Model& model, const Eigen::VectorXd& q, Eig
     const double norm = lambda.norm();
     if (norm > row.bound) lambda *= row.bound / norm;
     row.lambda = lambda;
-    for (int k = 0; k < row.n; ++k)
-      m_dv.segment<3>(3 * row.cp[k]) += (row.c[k] / model.mass[row.cp[k]]) * lambda;
+    for (int k = 0; k < row.n; ++k) m_dv.segment<3>(3 * row.cp[k]) += row.cm[k] * lambda;
   }
   // projected Gauss–Seidel on the accumulated impulses; a pair's rate now is its rate over
   // the step plus what the impulses so far changed (positions move by h Δv)
@@ -121,8 +121,7 @@ void YarnFrictionFilter::apply(const Model& model, const Eigen::VectorXd& q, Eig
       const Eigen::Vector3d d = lambda - row.lambda;
       if (d.squaredNorm() == 0) continue;
       row.lambda = lambda;
-      for (int k = 0; k < row.n; ++k)
-        m_dv.segment<3>(3 * row.cp[k]) += (row.c[k] / model.mass[row.cp[k]]) * d;
+      for (int k = 0; k < row.n; ++k) m_dv.segment<3>(3 * row.cp[k]) += row.cm[k] * d;
       change = std::max(change, d.norm() * row.inv_m);  // the largest rate change
       total = std::max(total, lambda.norm() * row.inv_m);
     }

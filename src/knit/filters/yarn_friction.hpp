@@ -67,6 +67,7 @@ class YarnFrictionFilter : public VelocityFilter {
     int n = 0;         // control points (≤ 8)
     int cp[8];         // their indices
     double c[8];       // their coefficients c_k
+    double cm[8];      // and c_k / M_k
     double inv_m = 0;  // Σ c_k² / M_k
     double bound = 0;  // μ N h (g cm/s)
     Eigen::Vector3d normal, lambda;
