@@ -542,6 +542,14 @@ std::string plot_stretch_runs(const std::vector<std::string>& dirs, const std::s
         speed << std::setprecision(3) << s["speed_cm_s"].get<double>();
         label += ", " + speed.str() + " cm/s";
       }
+      // yarn friction changes the model: say so (the paper's model has none)
+      const nlohmann::json::json_pointer at("/params/material/yarn_friction");
+      const nlohmann::json mu = s.contains(at) ? s.at(at) : nlohmann::json();
+      if (mu.is_number() && mu.get<double>() > 0) {
+        std::ostringstream text;
+        text << std::setprecision(3) << mu.get<double>();
+        label += ", friction " + text.str();
+      }
     }
     // a held run's curve is the ends of its holds (older runs have no such column)
     const auto eq = std::find(t.columns.begin(), t.columns.end(), "equilibrium");
