@@ -199,7 +199,7 @@ TEST(YarnFriction, ConservesMomentumAndOnlyEverSlowsTheStepsRelativeMotion) {
                          (after - after.dot(n) * n).norm() / (before - before.dot(n) * n).norm());
       }
       // (the sweeps converge slowly on pairs that share most of their control points: a
-      // few per cent of the sliding is left after these 10 × 16 sweeps)
+      // few per cent of the sliding is left after these 10 steps' sweeps)
       EXPECT_LT(worst, 0.05) << "a stuck pair's sliding is stopped";
     }
     if (mu == 0.05) {

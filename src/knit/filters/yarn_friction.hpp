@@ -28,7 +28,10 @@
 // control points, which makes the sweeps converge slowly; each pair therefore starts from
 // its impulse of the last step (warm start: a pair that stays in contact keeps its
 // friction, turned into the new tangent plane and cut to the new cone), so a contact that
-// sticks for many steps converges over them. Each update minimises ½ Σ M_k |q_k(result) −
+// sticks for many steps converges over them. Four sweeps per step are enough: on a 12×12
+// stockinette pulled along the course (2 cm/s, μ = 0.3) 4 against 16 changed the force by
+// at most 0.6 % at every strain and cut the filter's time 2.9× (SOR with ω = 1.5 did not
+// converge faster). Each update minimises ½ Σ M_k |q_k(result) −
 // q_k(start)|² / h² over that pair's λ within its cone, so the filter only ever slows the step's
 // relative motion; its impulses are equal and opposite, so it conserves linear momentum.
 #include <vector>
@@ -39,7 +42,7 @@ namespace knit {
 
 class YarnFrictionFilter : public VelocityFilter {
  public:
-  static constexpr int PASSES = 16;
+  static constexpr int PASSES = 4;
   /// The sweeps stop when no pair's rate changed by more than this fraction of the
   /// largest rate an impulse has stopped.
   static constexpr double TOLERANCE = 1e-3;
