@@ -8,7 +8,7 @@
 # interruption. Long (about an hour at 12×12 on 2 cores): run it in the background, e.g.
 #   nohup scripts/stretch_tests.sh > out/stretch.log 2>&1 &
 # Usage: scripts/stretch_tests.sh [--rows R] [--cols C] [--speed V] [--to E] [--wale-to E]
-#                                 [--threads N] [--friction MU]
+#                                 [--threads N] [--friction MU] [--directions LIST]
 # --to is the strain of the course and bias pulls (default 1), --wale-to the wale pull's
 # (default 0.6: a stockinette's loops jam at about 0.8 along the wale, where the
 # inextensible yarn stops the pull and the run ends unstable). A run that ends unstable
@@ -17,9 +17,13 @@
 # damping filter (--yarn-friction MU --alpha-small 0 --alpha-large 0), whose curves do not
 # depend on the pulling speed; they and their sheets go to out/stretch/RxC/friction_MU
 # (the relaxations are shared).
+# --directions LIST: the yarn pulls to run now, a comma-separated subset of course,wale,bias
+# (default all three); the sheet and the figures wait until every yarn pull has ended.
+# KNITSIM=PATH runs another knitsim binary (e.g. a copy, so that a rebuild of build/ does
+# not change a long run halfway).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-rows=12 cols=12 speed=1 to=1.0 wale_to=0.6 threads=0 friction=
+rows=12 cols=12 speed=1 to=1.0 wale_to=0.6 threads=0 friction= directions=course,wale,bias
 while [ $# -gt 0 ]; do
   case $1 in
     --rows) rows=$2; shift 2 ;;
@@ -29,11 +33,19 @@ while [ $# -gt 0 ]; do
     --wale-to) wale_to=$2; shift 2 ;;
     --threads) threads=$2; shift 2 ;;
     --friction) friction=$2; shift 2 ;;
+    --directions) directions=$2; shift 2 ;;
     *) echo "stretch_tests: unknown option '$1'" >&2; exit 2 ;;
   esac
 done
-[ -x build/knitsim ] || scripts/setup.sh
-k=./build/knitsim
+for d in ${directions//,/ }; do
+  case $d in
+    course | wale | bias) ;;
+    *) echo "stretch_tests: --directions: unknown direction '$d' (course, wale, bias)" >&2; exit 2 ;;
+  esac
+done
+k=${KNITSIM:-./build/knitsim}
+[ -n "${KNITSIM:-}" ] || [ -x build/knitsim ] || scripts/setup.sh
+[ -x "$k" ] || { echo "stretch_tests: KNITSIM=$k is not an executable" >&2; exit 2; }
 relaxed=out/stretch/${rows}x${cols}
 root=$relaxed
 yarn=()
@@ -54,12 +66,21 @@ for p in stockinette garter rib2x2; do
   fi
   knit=$relax/relaxed.kstate
   [ -f "$knit" ] || knit=$relax/final.kstate
-  for d in course wale bias; do
+  for d in ${directions//,/ }; do
     run=$root/${p}_$d
     ended "$run" || $k stretch --from "$knit" --direction $d --to "$(strain_of $d)" \
       --speed "$speed" "${yarn[@]}" -j "$threads" -q --overwrite --out "$run" || true
   done
 done
+
+missing=
+for p in stockinette garter rib2x2; do
+  for d in course wale bias; do ended "$root/${p}_$d" || missing="$missing ${p}_$d"; done
+done
+if [ -n "$missing" ]; then
+  echo "stretch_tests: yarn pulls still to run:$missing; the sheet and the figures wait for them"
+  exit 0
+fi
 
 # the sheet: fitted once to the stockinette (its course run does the fit), then given
 # every knit's geometry with the fitted stiffnesses
