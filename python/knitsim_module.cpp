@@ -105,6 +105,7 @@ py::dict knit_info(const std::optional<KnitInfo>& k) {
   d["segments_per_stitch"] = k->segments_per_stitch;
   d["stitch_size_cm"] = k->stitch_size_cm;
   d["shrink"] = k->shrink;
+  d["bind_off"] = k->bind_off;
   return d;
 }
 
@@ -433,7 +434,8 @@ PYBIND11_MODULE(knitsim, m) {
       [](const std::string& pattern, std::optional<int> rows, std::optional<int> cols,
          std::optional<bool> in_the_round, double max_time, double rest, double stitch_size,
          double shrink, int segments_per_stitch, const py::object& params, const std::string& out,
-         bool overwrite, bool progress, const State* resume, bool fire, double residual) {
+         bool overwrite, bool progress, const State* resume, bool fire, double residual,
+         bool bind_off) {
         RelaxKnitOptions o;
         if (is_knitout_path(pattern)) {
           // a knitting-machine program knits what it says: its size is the default
@@ -447,6 +449,7 @@ PYBIND11_MODULE(knitsim, m) {
         if (in_the_round) o.knit.in_the_round = *in_the_round;
         o.knit.stitch_size_cm = stitch_size;
         o.knit.segments_per_stitch = segments_per_stitch;
+        o.knit.bind_off = bind_off;
         o.shrink = shrink;
         o.params = params_over(o.params, params, "relax");
         o.run.max_time = max_time;
@@ -465,11 +468,13 @@ PYBIND11_MODULE(knitsim, m) {
       "max_time"_a = 2.0, "rest"_a = 1e-5, "stitch_size"_a = 0.0, "shrink"_a = RELAX_SHRINK,
       "segments_per_stitch"_a = 8, "params"_a = py::none(), "out"_a = "", "overwrite"_a = false,
       "progress"_a = false, "resume"_a = nullptr, "fire"_a = false, "residual"_a = 0.0,
+      "bind_off"_a = false,
       "Generates `pattern` (stockinette, garter, rib2x2, seed, … a chart file or a knitout "
       "program) at rows × cols (default 12 × 12, or the program's size) and relaxes it until it "
       "rests (kinetic energy per length below `rest` erg/cm, or with `residual` > 0 the force "
       "residual below `residual` cm/s²) or `max_time` s of simulated time. `fire`: relax by "
       "minimisation (FIRE; rest by the force residual, 1 cm/s² unless `residual` says). "
+      "`bind_off`: tie the last row's loops to the row below (a sewn bind-off). "
       "`params`: a dict of scene parameters over the relaxation's. With `out`, writes the run "
       "as `knitsim relax --out` does. Returns a Knit.");
 

@@ -8,7 +8,7 @@
 # interruption. Long (about an hour at 12×12 on 2 cores): run it in the background, e.g.
 #   nohup scripts/stretch_tests.sh > out/stretch.log 2>&1 &
 # Usage: scripts/stretch_tests.sh [--rows R] [--cols C] [--speed V] [--to E] [--wale-to E]
-#                                 [--threads N] [--friction MU] [--directions LIST]
+#                                 [--threads N] [--friction MU] [--directions LIST] [--bind-off]
 # --to is the strain of the course and bias pulls (default 1), --wale-to the wale pull's
 # (default 0.6: a stockinette's loops jam at about 0.8 along the wale, where the
 # inextensible yarn stops the pull and the run ends unstable). A run that ends unstable
@@ -17,13 +17,16 @@
 # damping filter (--yarn-friction MU --alpha-small 0 --alpha-large 0), whose curves do not
 # depend on the pulling speed; they and their sheets go to out/stretch/RxC/friction_MU
 # (the relaxations are shared).
+# --bind-off: the samples are knitted with their last row bound off (`relax --bind-off`),
+# so that the bias pull cannot ladder the top edge; relaxations and runs go to
+# out/stretch/RxC_bound.
 # --directions LIST: the yarn pulls to run now, a comma-separated subset of course,wale,bias
 # (default all three); the sheet and the figures wait until every yarn pull has ended.
 # KNITSIM=PATH runs another knitsim binary (e.g. a copy, so that a rebuild of build/ does
 # not change a long run halfway).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-rows=12 cols=12 speed=1 to=1.0 wale_to=0.6 threads=0 friction= directions=course,wale,bias
+rows=12 cols=12 speed=1 to=1.0 wale_to=0.6 threads=0 friction= directions=course,wale,bias bind_off=
 while [ $# -gt 0 ]; do
   case $1 in
     --rows) rows=$2; shift 2 ;;
@@ -34,6 +37,7 @@ while [ $# -gt 0 ]; do
     --threads) threads=$2; shift 2 ;;
     --friction) friction=$2; shift 2 ;;
     --directions) directions=$2; shift 2 ;;
+    --bind-off) bind_off=--bind-off; shift ;;
     *) echo "stretch_tests: unknown option '$1'" >&2; exit 2 ;;
   esac
 done
@@ -46,7 +50,7 @@ done
 k=${KNITSIM:-./build/knitsim}
 [ -n "${KNITSIM:-}" ] || [ -x build/knitsim ] || scripts/setup.sh
 [ -x "$k" ] || { echo "stretch_tests: KNITSIM=$k is not an executable" >&2; exit 2; }
-relaxed=out/stretch/${rows}x${cols}
+relaxed=out/stretch/${rows}x${cols}${bind_off:+_bound}
 root=$relaxed
 yarn=()
 if [ -n "$friction" ]; then
@@ -62,7 +66,8 @@ strain_of() { if [ "$1" = wale ]; then echo "$wale_to"; else echo "$to"; fi; }
 for p in stockinette garter rib2x2; do
   relax=$relaxed/${p}_relax
   if [ ! -f "$relax/final.kstate" ] || ! done_ok "$relax"; then
-    $k relax $p --rows "$rows" --cols "$cols" --max-time 1 -j "$threads" -q --overwrite --out "$relax"
+    $k relax $p --rows "$rows" --cols "$cols" $bind_off --max-time 1 -j "$threads" -q --overwrite \
+      --out "$relax"
   fi
   knit=$relax/relaxed.kstate
   [ -f "$knit" ] || knit=$relax/final.kstate

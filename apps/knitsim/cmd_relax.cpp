@@ -59,6 +59,9 @@ void register_relax(CLI::App& app) {
                   "spline segments per stitch")
       ->check(CLI::Range(knit::MIN_SEGMENTS_PER_STITCH, knit::MAX_SEGMENTS_PER_STITCH));
   cmd->add_flag("--round", o->knit.knit.in_the_round, "knit in the round (a tube)");
+  cmd->add_flag("--bind-off", o->knit.knit.bind_off,
+                "bind off the last row: tie each of its loops to the loop below where they cross, "
+                "as a sewn bind-off does, so that its loops cannot ladder when pulled");
   cmd->add_option("--stitch-size", o->knit.knit.stitch_size_cm,
                   "yarn length per stitch before shrinking (cm; 0 = default for the yarn; "
                   "working range " +
@@ -117,6 +120,7 @@ void register_relax(CLI::App& app) {
         if (!given("--segments-per-stitch"))
           o->knit.knit.segments_per_stitch = f.knit->segments_per_stitch;
         if (!given("--stitch-size")) o->knit.knit.stitch_size_cm = f.knit->stitch_size_cm;
+        if (!given("--bind-off")) o->knit.knit.bind_off = f.knit->bind_off;
         if (!given("--shrink")) o->shrink = f.knit->shrink;
       } else if (o->pattern.empty()) {
         throw std::invalid_argument("--resume " + o->resume +

@@ -99,6 +99,8 @@ void register_stretch(CLI::App& app) {
       ->check(CLI::Range(2, 1'000'000));
   cmd->add_option("--cols", o->relax.knit.cols, "stitches per row of the PATTERN's sample")
       ->check(CLI::Range(2, 1'000'000));
+  cmd->add_flag("--bind-off", o->relax.knit.bind_off,
+                "bind off the PATTERN's last row before relaxing it (see `knitsim relax`)");
   cmd->add_option("--relax-time", o->relax_time, "seconds of relaxation before the pull")
       ->check(finite_positive(knit::MAX_DURATION));
   add_threads_option(cmd, o->threads);
@@ -122,6 +124,10 @@ void register_stretch(CLI::App& app) {
       throw std::invalid_argument("stretch: --fit, --k-* and --node-spacing need --sheet");
     if (o->from.empty() == (o->inputs.size() != 1))
       throw std::invalid_argument("stretch: give either one PATTERN or --from STATE");
+    if (o->relax.knit.bind_off && !o->from.empty())
+      throw std::invalid_argument(
+          "stretch --bind-off: binds off a PATTERN before relaxing it; a state --from keeps "
+          "what it was knitted with (`knitsim relax --bind-off` makes one)");
     o->stretch.direction = knit::parse_stretch_direction(o->direction);
     o->stretch.params.discretisation.contact_points = o->contact_points;
     if (cmd->count("--time-step")) o->stretch.params.solver.time_step = o->time_step;

@@ -76,6 +76,17 @@ def test_fire_relaxation_rests_by_the_force_residual():
     with pytest.raises(ValueError, match="residual"):
         knitsim.relax("stockinette", rows=4, cols=4, max_time=0.01, residual=-1.0)
 
+def test_bind_off_ties_the_last_row(tmp_path):
+    # a bound-off knit: two ties per loop of its last row beside the ends' two glues,
+    # and its state file says so
+    k = knitsim.relax("stockinette", rows=3, cols=4, max_time=0.002, bind_off=True,
+                      out=str(tmp_path / "b"))
+    assert k.summary["bind_off"] is True
+    f = knitsim.read_state(str(tmp_path / "b" / "relaxed.kstate"))
+    assert f.knit["bind_off"] is True
+    assert knitsim.relax("stockinette", rows=3, cols=4, max_time=0.002).summary["bind_off"] is False
+
+
 def test_state_arrays_are_views_of_the_state(small_knit):
     s = small_knit.state.copy()
     q = s.q

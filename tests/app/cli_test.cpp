@@ -362,6 +362,42 @@ TEST(Cli, ResumeTakesTheKnitFromTheStateFile) {
   EXPECT_EQ(nlohmann::json::parse(in)["rows"], 3);
 }
 
+// --bind-off: the state file says the knit is bound off and holds its ties (two per loop
+// of the last row); --resume keeps them unless told otherwise, and --bind-off on a state
+// knitted without is refused
+TEST(Cli, BindOffIsKeptInTheStateFileAndOnResume) {
+  const std::string dir = temp_dir("cli_bind_off");
+  const std::string opts = " --quiet --no-frames --threads 1 --max-time 0.002";
+  ASSERT_EQ(
+      run("relax stockinette --rows 3 --cols 4 --bind-off" + opts + " --out " + dir + "/first")
+          .code,
+      0);
+  const std::string first = dir + "/first/relaxed.kstate";
+  const knit::StateFile f = knit::read_state_file(first);
+  ASSERT_TRUE(f.knit.has_value());
+  EXPECT_TRUE(f.knit->bind_off);
+  EXPECT_EQ(f.glues.size(), 2u + 2 * 4);
+  std::ifstream in(dir + "/first/summary.json");
+  EXPECT_EQ(nlohmann::json::parse(in)["bind_off"], true);
+  const Result alone = run("relax --resume " + first + opts + " --out " + dir + "/alone");
+  ASSERT_EQ(alone.code, 0) << alone.output;
+  const knit::StateFile a = knit::read_state_file(dir + "/alone/relaxed.kstate");
+  ASSERT_TRUE(a.knit.has_value());
+  EXPECT_TRUE(a.knit->bind_off);
+  EXPECT_EQ(a.glues.size(), f.glues.size());
+  ASSERT_EQ(run("relax stockinette --rows 3 --cols 4" + opts + " --out " + dir + "/live").code, 0);
+  const Result bound = run("relax stockinette --rows 3 --cols 4 --bind-off --resume " + dir +
+                           "/live/relaxed.kstate" + opts + " --out " + dir + "/bound");
+  EXPECT_EQ(bound.code, 1);
+  EXPECT_NE(bound.output.find("without a bind-off; give no --bind-off"), std::string::npos)
+      << bound.output;
+  EXPECT_FALSE(fs::exists(dir + "/bound"));
+  const Result stretch = run("stretch --from " + first + " --bind-off --out " + dir + "/s");
+  EXPECT_EQ(stretch.code, 1);
+  EXPECT_NE(stretch.output.find("--bind-off"), std::string::npos) << stretch.output;
+  EXPECT_FALSE(fs::exists(dir + "/s"));
+}
+
 }  // namespace
 
 namespace {

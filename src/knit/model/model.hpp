@@ -115,6 +115,7 @@ struct KnitInfo {
   int segments_per_stitch = 8;
   double stitch_size_cm = 0;  ///< 0 = the default for the yarn
   double shrink = 1;          ///< rest-length factor c the model was built with
+  bool bind_off = false;      ///< the last row is bound off (KnitOptions::bind_off)
 };
 
 class ConstraintGroup;

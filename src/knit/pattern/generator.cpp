@@ -391,6 +391,11 @@ void check_options(const Pattern& pattern, const KnitOptions& opt) {
   if (opt.segments_per_stitch < 4)
     throw std::invalid_argument("knit option segments_per_stitch must be >= 4, got " +
                                 std::to_string(opt.segments_per_stitch));
+  if (opt.bind_off && opt.rows < 2)
+    throw std::invalid_argument(
+        "knit option bind_off needs at least 2 rows (the last row is tied to the one below), "
+        "got rows = " +
+        std::to_string(opt.rows));
   if (!(opt.radius > 0) || !std::isfinite(opt.radius))
     throw std::invalid_argument("knit option radius must be a positive length in cm, got " +
                                 std::to_string(opt.radius));
@@ -403,6 +408,57 @@ void check_options(const Pattern& pattern, const KnitOptions& opt) {
       throw std::invalid_argument(std::string("knit option ") + name +
                                   " must be a length >= 0 in cm (0 = default), got " +
                                   std::to_string(value));
+}
+
+// The bind-off's two ties of the loop of `top` (a stitch of the last row) to the loop of
+// `below` (the stitch under it): where its legs cross that loop's head, the upper part of
+// the loop below (above LEG_CROSSING_HEIGHT of its height), each tie at the closest pair
+// of yarn points there. The two legs are told apart by their place along the yarn: the
+// second tie is the closest pair at least a quarter of the loop away from the first.
+std::vector<Glue> bind_off_ties(const Eigen::Matrix3Xd& cp, const std::vector<StitchCoord>& stitch,
+                                const std::vector<YarnPiece>& piece, StitchCoord top,
+                                StitchCoord below) {
+  constexpr int n = 16;                        // samples per segment
+  constexpr double LEG_CROSSING_HEIGHT = 0.8;  // of the loop below, from its bottom
+  struct Sample {
+    YarnPoint at;
+    Eigen::Vector3d x;
+    int index;  // along the loop, in samples
+  };
+  auto samples = [&](StitchCoord s) {
+    std::vector<Sample> out;
+    for (int i = 0; i < static_cast<int>(stitch.size()); ++i)
+      if (piece[i] == YarnPiece::STITCH && stitch[i].row == s.row && stitch[i].col == s.col)
+        for (int k = 0; k < n; ++k) {
+          const double t = (k + 0.5) / n;
+          out.push_back({{i, t}, cp.middleCols<4>(i) * bspline_basis(t), 0});
+        }
+    for (size_t j = 0; j < out.size(); ++j) out[j].index = static_cast<int>(j);
+    return out;
+  };
+  const std::vector<Sample> a = samples(top), b = samples(below);
+  if (a.empty() || b.empty()) return {};
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (const Sample& s : b) lo = std::min(lo, s.x.y()), hi = std::max(hi, s.x.y());
+  const double head_from = lo + LEG_CROSSING_HEIGHT * (hi - lo);
+  std::vector<Glue> ties;
+  int first = -1;
+  for (int tie = 0; tie < 2; ++tie) {
+    double best = std::numeric_limits<double>::infinity();
+    const Sample *sa = nullptr, *sb = nullptr;
+    for (const Sample& p : a) {
+      if (first >= 0 && std::abs(p.index - first) < static_cast<int>(a.size()) / 4) continue;
+      for (const Sample& q : b) {
+        if (q.x.y() < head_from) continue;
+        const double d = (p.x - q.x).squaredNorm();
+        if (d < best) best = d, sa = &p, sb = &q;
+      }
+    }
+    if (!sa) break;
+    first = sa->index;
+    ties.push_back({sa->at, sb->at});
+  }
+  return ties;
 }
 
 // closest point on the spline to `p` among segments accepted by `allowed`
@@ -540,6 +596,16 @@ GeneratedKnit generate_knit(const Pattern& pattern_in, const KnitOptions& opt) {
           .norm());
   out.glue_gap_cm.push_back(
       (out.control_points.middleCols<4>(to_end.segment) * bspline_basis(to_end.t) - end).norm());
+  if (opt.bind_off)
+    for (int col = 0; col < opt.cols; ++col)
+      for (const Glue& g : bind_off_ties(out.control_points, out.stitch, out.piece,
+                                         {opt.rows - 1, col}, {opt.rows - 2, col})) {
+        out.glues.push_back(g);
+        const auto at = [&](const YarnPoint& p) -> Eigen::Vector3d {
+          return out.control_points.middleCols<4>(p.segment) * bspline_basis(p.t);
+        };
+        out.glue_gap_cm.push_back((at(g.a) - at(g.b)).norm());
+      }
 
   // centre: a flat piece on the origin, a tube on its axis (y centred)
   Eigen::Vector3d centre =

@@ -34,6 +34,11 @@ struct KnitOptions {
   double stitch_width_cm = 0;  ///< course spacing of the loops (cm), 0 = default
   double row_height_cm = 0;    ///< wale spacing of the rows (cm), 0 = default
   double loop_depth_cm = 0;    ///< z distance between yarns where they cross (cm), 0 = default
+  /// Secure the last row's live loops, as a sewn bind-off does: each is tied (glued) to the
+  /// loop below it where its two legs cross that loop's head, so that a pull on the top edge
+  /// cannot draw its loops out and ladder them down. Needs at least 2 rows. Off by default:
+  /// the top loops are live, as on the needles.
+  bool bind_off = false;
 };
 
 /// What part of the yarn a segment belongs to.
@@ -53,7 +58,9 @@ struct GeneratedKnit {
                                     ///< stitch they enter or leave)
   std::vector<YarnPiece> piece;     ///< per segment
   std::vector<Glue> glues;          ///< each free end glued to its closest yarn point
-                                    ///< (segment indices local to this yarn)
+                                    ///< (segment indices local to this yarn); with
+                                    ///< bind_off, then the bind-off's ties, two per stitch
+                                    ///< of the last row in column order
   double stitch_width_cm = 0;
   double row_height_cm = 0;
   double loop_depth_cm = 0;
@@ -66,7 +73,8 @@ struct GeneratedKnit {
   double min_distance_ratio = 0;
   int min_distance_segment_a = -1, min_distance_segment_b = -1;  ///< where it occurs
   /// gap |y(a) − y(b)| of each glue as generated (cm): the ends lie against the fabric,
-  /// about one yarn diameter from the point they are glued to.
+  /// about one yarn diameter from the point they are glued to; a bind-off tie's gap is
+  /// where the yarns cross and touch, about a yarn diameter.
   std::vector<double> glue_gap_cm;
   int segments_per_turn = 0;
   int segments_per_tail = 0;
