@@ -426,17 +426,24 @@ TEST(Cli, HangingKnitExampleReportsItsClamp) {
 
 namespace {
 
-// knitsim stretch: a pattern is relaxed and pulled; two runs' curves go into one plot; a
-// bad direction is refused with nothing written
+// knitsim stretch: a pattern is relaxed (once bound off) and pulled; two runs' curves go
+// into one plot; a bad direction is refused with nothing written
 TEST(Cli, StretchRunsAndPlotsSeveralRuns) {
   const std::string dir = temp_dir("cli_stretch");
   const std::string common = " --rows 5 --cols 6 --relax-time 0.05 --to 0.05 --quiet --no-frames";
   ASSERT_EQ(run("stretch garter" + common + " --out " + dir + "/course").code, 0);
-  const Result wale =
-      run("stretch garter" + common + " -d wale --clamp-stitches 1 --out " + dir + "/wale");
+  const Result wale = run("stretch garter" + common +
+                          " -d wale --clamp-stitches 1 --bind-off --out " + dir + "/wale");
   ASSERT_EQ(wale.code, 0) << wale.output;
   for (const char* f : {"/course/stretch.csv", "/course/relaxed.kstate", "/wale/summary.json"})
     EXPECT_TRUE(fs::exists(dir + f)) << f;
+  for (const auto& [run_dir, bound] : {std::pair{"/course", false}, std::pair{"/wale", true}}) {
+    std::ifstream in(dir + run_dir + "/summary.json");
+    EXPECT_EQ(nlohmann::json::parse(in)["bind_off"], bound) << run_dir;
+    const knit::StateFile f = knit::read_state_file(dir + run_dir + "/relaxed.kstate");
+    ASSERT_TRUE(f.knit.has_value());
+    EXPECT_EQ(f.knit->bind_off, bound) << run_dir;
+  }
   const Result plot =
       run("stretch " + dir + "/course " + dir + "/wale --plot " + dir + "/curves.png");
   ASSERT_EQ(plot.code, 0) << plot.output;

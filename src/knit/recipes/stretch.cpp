@@ -369,7 +369,8 @@ void write_stretch_outputs(const StretchOptions& o, const std::vector<StretchSam
 
 std::string stretch_label(const StateFile& file, StretchDirection direction) {
   return std::string(file.knit ? file.knit->pattern + ", " : "") +
-         stretch_direction_name(direction);
+         stretch_direction_name(direction) +
+         (file.knit && file.knit->bind_off ? ", bound off" : "");
 }
 
 StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions& opts) {
@@ -491,6 +492,7 @@ StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions&
   for (const auto& [k, v] : o.extra.items()) run.extra[k] = v;
   if (g.file.knit) {
     run.extra["pattern"] = g.file.knit->pattern;
+    run.extra["bind_off"] = g.file.knit->bind_off;
     run.extra["rows"] = g.file.knit->rows;
     run.extra["cols"] = g.file.knit->cols;
   }
@@ -533,6 +535,7 @@ std::string plot_stretch_runs(const std::vector<std::string>& dirs, const std::s
           (s.contains("pattern") && s["pattern"].is_string() ? s["pattern"].get<std::string>() + " "
                                                              : std::string()) +
           s["direction"].get<std::string>();
+      if (s.value("bind_off", false) == true) label += ", bound off";
       if (s.contains("model") && s["model"] == "sheet") {
         label += ", sheet";
       } else if (s.contains("protocol") && s["protocol"] == "hold") {
