@@ -31,21 +31,6 @@ struct Outcome {
   double wall_s = 0;
 };
 
-// raises the lumped mass of the two control points at each yarn end to at least half
-// the mean interior control point's (row-sum lumping gives the ends 1/24 and 1/2 of it)
-void raise_end_mass(knit::Model& m) {
-  for (const knit::YarnInfo& y : m.yarns) {
-    const int n = y.num_cp();
-    if (n < 8) continue;
-    double interior = 0;
-    for (int k = y.cp_begin + 3; k < y.cp_end - 3; ++k) interior += m.mass[k];
-    interior /= n - 6;
-    for (int k : {y.cp_begin, y.cp_begin + 1, y.cp_end - 2, y.cp_end - 1})
-      m.mass[k] = std::max(m.mass[k], 0.5 * interior);
-  }
-  for (int k = 0; k < m.num_cp(); ++k) m.inv_mass3.segment<3>(3 * k).setConstant(1.0 / m.mass[k]);
-}
-
 Outcome run(const knit::Model& base, const knit::State& start, const std::string& variant, double h,
             double duration, double alpha_small, double alpha_large, bool round) {
   // a variant is one or more ingredients joined by '+': "imex+no-contact"
@@ -53,7 +38,10 @@ Outcome run(const knit::Model& base, const knit::State& start, const std::string
     return ("+" + variant + "+").find("+" + part + "+") != std::string::npos;
   };
   knit::Model model = base;
-  if (has("end-mass")) raise_end_mass(model);
+  if (has("end-mass")) {  // row-sum lumping gives the ends 1/24 and 1/2 of an interior mass
+    model.params.discretisation.end_mass_floor = 0.5;
+    knit::apply_end_mass_floor(model, 0.5);
+  }
   if (has("imex")) model.params.solver.integrator = knit::Integrator::IMEX;
   std::vector<std::unique_ptr<knit::Term>> terms;
   for (auto& t : knit::default_terms(model)) {

@@ -15,7 +15,9 @@
 # keeps its curve up to there and is not repeated.
 # --friction MU: the yarn runs with yarn–yarn Coulomb friction MU in place of the non-rigid
 # damping filter (--yarn-friction MU --alpha-small 0 --alpha-large 0), whose curves do not
-# depend on the pulling speed; they and their sheets go to out/stretch/RxC/friction_MU
+# depend on the pulling speed, and with the yarn ends' mass floor (--end-mass-floor 0.5:
+# with nothing to damp them, a free end's light control points jitter at the step); they
+# and their sheets go to out/stretch/RxC/friction_MU
 # (the relaxations are shared).
 # --bind-off: the samples are knitted with their last row bound off (`relax --bind-off`),
 # so that the bias pull cannot ladder the top edge; relaxations and runs go to
@@ -55,7 +57,7 @@ root=$relaxed
 yarn=()
 if [ -n "$friction" ]; then
   root=$relaxed/friction_$friction
-  yarn=(--yarn-friction "$friction" --alpha-small 0 --alpha-large 0)
+  yarn=(--yarn-friction "$friction" --alpha-small 0 --alpha-large 0 --end-mass-floor 0.5)
 fi
 mkdir -p "$root"
 done_ok() { [ -f "$1/summary.json" ] && grep -q '"status": "ok"' "$1/summary.json"; }

@@ -95,6 +95,12 @@ void register_stretch(CLI::App& app) {
                   "viscous contact damping only)")
       ->check(finite_range(knit::param_range("yarn_friction").min,
                            knit::param_range("yarn_friction").max));
+  cmd->add_option("--end-mass-floor", o->stretch.params.discretisation.end_mass_floor,
+                  "each yarn end's two control points get at least this fraction of an interior "
+                  "one's mass (default 0: the row sums, 1/24 at the last point; 0.5 stops a free "
+                  "end jittering when nothing damps it, as with --yarn-friction)")
+      ->check(finite_range(knit::param_range("end_mass_floor").min,
+                           knit::param_range("end_mass_floor").max));
   cmd->add_option("--rows", o->relax.knit.rows, "rows of the PATTERN's sample")
       ->check(CLI::Range(2, 1'000'000));
   cmd->add_option("--cols", o->relax.knit.cols, "stitches per row of the PATTERN's sample")
@@ -133,14 +139,15 @@ void register_stretch(CLI::App& app) {
     if (cmd->count("--time-step")) o->stretch.params.solver.time_step = o->time_step;
     if (cmd->count("--integrator"))
       o->stretch.params.solver.integrator = knit::parse_integrator(o->integrator);
-    if (o->use_sheet && (cmd->count("--hold") + cmd->count("--hold-time") +
-                             cmd->count("--hold-damped") + cmd->count("--time-step") +
-                             cmd->count("--integrator") + cmd->count("--yarn-friction") >
-                         0))
+    if (o->use_sheet &&
+        (cmd->count("--hold") + cmd->count("--hold-time") + cmd->count("--hold-damped") +
+             cmd->count("--time-step") + cmd->count("--integrator") +
+             cmd->count("--yarn-friction") + cmd->count("--end-mass-floor") >
+         0))
       throw std::invalid_argument(
           "stretch --sheet: the sheet is pulled through equilibria already; --hold, "
-          "--hold-time, --hold-damped, --time-step, --integrator and --yarn-friction are for "
-          "the yarn model");
+          "--hold-time, --hold-damped, --time-step, --integrator, --yarn-friction and "
+          "--end-mass-floor are for the yarn model");
     if ((cmd->count("--hold-time") || o->stretch.hold_damped) && !cmd->count("--hold"))
       throw std::invalid_argument("stretch: --hold-time and --hold-damped need --hold");
     o->stretch.out_dir = o->out;

@@ -93,5 +93,34 @@ TEST(Basis, LumpedMassEqualsExactMassRowSums) {
   EXPECT_NEAR(m.mass.sum(), m.params.material.density * m.total_length(), 1e-12);
 }
 
+// Discretisation::end_mass_floor raises the two control points at each end of a yarn to
+// that fraction of the yarn's mean interior control point, and leaves every other one
+// (and every other yarn's short ends) as the row sums make them.
+TEST(Basis, EndMassFloorRaisesOnlyTheYarnEnds) {
+  Eigen::Matrix3Xd cp(3, 20);
+  for (int k = 0; k < 20; ++k)
+    cp.col(k) = Eigen::Vector3d(k * 0.4, 0.3 * std::sin(k), 0.01 * k * k);
+  ModelBuilder b;
+  b.add_yarn(cp);
+  b.add_yarn(cp.leftCols(6).colwise() + Eigen::Vector3d(0, 5, 0));  // too short for a floor
+  const Model plain = b.build(Params{});
+  Params p;
+  p.discretisation.end_mass_floor = 0.5;
+  const Model floored = b.build(p);
+  double interior = 0;
+  for (int k = 3; k < 17; ++k) interior += plain.mass[k];
+  interior /= 14;
+  EXPECT_NEAR(plain.mass[0], interior / 24, 0.05 * interior);  // the row sums' 1/24
+  for (int k = 0; k < plain.num_cp(); ++k) {
+    const bool end = k < 2 || (k >= 18 && k < 20);
+    const double expected = end ? std::max(plain.mass[k], 0.5 * interior) : plain.mass[k];
+    EXPECT_DOUBLE_EQ(floored.mass[k], expected) << "control point " << k;
+    EXPECT_DOUBLE_EQ(floored.inv_mass3[3 * k], 1 / expected) << "control point " << k;
+  }
+  EXPECT_GT(floored.mass[0], 10 * plain.mass[0]);
+  p.discretisation.end_mass_floor = 1.5;
+  EXPECT_THROW(validate_params(p), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace knit

@@ -108,6 +108,7 @@ Model ModelBuilder::build(const Params& params, double rest_scale) const {
   }
   m.inv_mass3.resize(3 * cp);
   for (int k = 0; k < cp; ++k) m.inv_mass3.segment<3>(3 * k).setConstant(1.0 / m.mass[k]);
+  apply_end_mass_floor(m, params.discretisation.end_mass_floor);
   m.stitch = m_stitch;
   if (m.stitch.empty()) m.stitch.assign(seg, StitchCoord{});
   if (static_cast<int>(m.stitch.size()) != seg)
@@ -167,6 +168,21 @@ Model ModelBuilder::build(const Params& params, double rest_scale) const {
                              m.contact_exclusions.end());
   build_constraint_groups(m);
   return m;
+}
+
+void apply_end_mass_floor(Model& m, double fraction) {
+  if (!(fraction > 0)) return;
+  for (const YarnInfo& y : m.yarns) {
+    const int n = y.num_cp();
+    if (n < 8) continue;  // no interior to speak of
+    double interior = 0;
+    for (int k = y.cp_begin + 3; k < y.cp_end - 3; ++k) interior += m.mass[k];
+    interior /= n - 6;
+    for (int k : {y.cp_begin, y.cp_begin + 1, y.cp_end - 2, y.cp_end - 1}) {
+      m.mass[k] = std::max(m.mass[k], fraction * interior);
+      m.inv_mass3.segment<3>(3 * k).setConstant(1.0 / m.mass[k]);
+    }
+  }
 }
 
 void build_constraint_groups(Model& m) {

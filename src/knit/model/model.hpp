@@ -208,6 +208,12 @@ double segment_arclength(const Vector12d& x, const QuadratureTable& quad);
 /// A copy of `model` with every rest length multiplied by `scale` (mass unchanged).
 Model scale_rest_lengths(const Model& model, double scale);
 
+/// Raises the lumped mass (and inverse mass) of the two control points at each end of
+/// every yarn of at least 8 control points to `fraction` of that yarn's mean interior
+/// control point's (Discretisation::end_mass_floor; ModelBuilder::build applies the
+/// model's own). Does nothing for fraction ≤ 0.
+void apply_end_mass_floor(Model& model, double fraction);
+
 /// Builds model.constraint_groups from its parameters, pins, glues and clamps. Rows that a
 /// clamp's held control points make redundant are left out: the length row of a segment
 /// whose four control points are all held, and a glue whose two points lie on such

@@ -23,6 +23,7 @@ const std::vector<ParamRange>& param_ranges() {
       {"yarn_friction", 0, 10, ""},
       {"quadrature_points", 3, 101, "points per segment"},
       {"contact_points", 1, 64, "points per segment"},
+      {"end_mass_floor", 0, 1, "of an interior control point's mass"},
       {"time_step", 1e-8, 1e-2, "s"},
       {"constraint_tolerance", 1e-12, 1, ""},
       {"max_projection_iterations", 1, 10000, ""},
@@ -82,6 +83,7 @@ void validate_params(const Params& p) {
         "quadrature_points = " + std::to_string(p.discretisation.quadrature_points) +
         " must be odd (Simpson's rule)");
   check_param("contact_points", p.discretisation.contact_points);
+  check_param("end_mass_floor", p.discretisation.end_mass_floor);
   check_param("time_step", p.solver.time_step);
   check_param("constraint_tolerance", p.solver.constraint_tolerance);
   check_param("max_projection_iterations", p.solver.max_projection_iterations);

@@ -34,6 +34,12 @@ struct Material {
 struct Discretisation {
   int quadrature_points = 11;  ///< Simpson points per segment for the energies (odd)
   int contact_points = 10;     ///< contact quadrature points per segment (MODEL.md §8: 10–20)
+  /// The two control points at each end of a yarn get at least this fraction of the mean
+  /// lumped mass of its interior control points. 0 (the default) keeps MODEL.md's row sums,
+  /// which give a yarn's last control point 1/24 of an interior one's and the one before
+  /// it 1/2: an artefact of the lumping that bounds the explicit step where an end is free
+  /// and undamped (docs/model.md §2). 0.5 adds about half a segment's mass at each end.
+  double end_mass_floor = 0;
 };
 
 /// How a step integrates the forces before the projection and the filters:

@@ -336,6 +336,7 @@ Params parse_params(const JsonReader& r, Params p) {
                 "yarn_friction",
                 "quadrature_points",
                 "contact_points",
+                "end_mass_floor",
                 "length_constraints",
                 "contact",
                 "constraint_tolerance",
@@ -372,6 +373,8 @@ Params parse_params(const JsonReader& r, Params p) {
       r.at("quadrature_points").fail("Simpson's rule needs an odd number of points");
   }
   if (r.has("contact_points")) p.discretisation.contact_points = r.at("contact_points").integer(1);
+  if (r.has("end_mass_floor"))
+    p.discretisation.end_mass_floor = r.at("end_mass_floor").positive(true);
   if (r.has("length_constraints"))
     p.solver.length_constraints = r.at("length_constraints").boolean();
   if (r.has("contact")) p.material.contact = r.at("contact").boolean();
