@@ -204,11 +204,13 @@ def test_stretch_with_held_clamps_samples_the_holds(saved_knit):
 
 
 def test_stretch_takes_parameters_such_as_yarn_friction(saved_knit):
-    r = knitsim.stretch(saved_knit, to=0.02, params={"yarn_friction": 0.3})
+    r = knitsim.stretch(saved_knit, to=0.02, params={"yarn_friction": 0.3, "end_mass_floor": 0.5})
     assert r["status"] == "ok"
     assert r["curve"]["force_moving"][-1] > 0
     with pytest.raises(ValueError, match="yarn_friction"):
         knitsim.stretch(saved_knit, to=0.02, params={"yarn_friction": -1})
+    with pytest.raises(ValueError, match="end_mass_floor"):
+        knitsim.stretch(saved_knit, to=0.02, params={"end_mass_floor": 2})
 
 
 def test_errors_are_the_librarys_messages(tmp_path):
