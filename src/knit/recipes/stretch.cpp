@@ -535,7 +535,7 @@ std::string plot_stretch_runs(const std::vector<std::string>& dirs, const std::s
           (s.contains("pattern") && s["pattern"].is_string() ? s["pattern"].get<std::string>() + " "
                                                              : std::string()) +
           s["direction"].get<std::string>();
-      if (s.value("bind_off", false) == true) label += ", bound off";
+      if (s.contains("bind_off") && s["bind_off"] == true) label += ", bound off";
       if (s.contains("model") && s["model"] == "sheet") {
         label += ", sheet";
       } else if (s.contains("protocol") && s["protocol"] == "hold") {
