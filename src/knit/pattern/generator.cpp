@@ -410,6 +410,11 @@ void check_options(const Pattern& pattern, const KnitOptions& opt) {
                                   std::to_string(value));
 }
 
+// y(p) on the generated yarn
+Eigen::Vector3d yarn_point(const Eigen::Matrix3Xd& cp, const YarnPoint& p) {
+  return cp.middleCols<4>(p.segment) * bspline_basis(p.t);
+}
+
 // The bind-off's two ties of the loop of `top` (a stitch of the last row) to the loop of
 // `below` (the stitch under it): where its legs cross that loop's head, the upper part of
 // the loop below (above LEG_CROSSING_HEIGHT of its height), each tie at the closest pair
@@ -591,21 +596,14 @@ GeneratedKnit generate_knit(const Pattern& pattern_in, const KnitOptions& opt) {
       closest_point(out.control_points, end, [&](int i) { return i < nseg - reach; });
   out.glues.push_back({YarnPoint{0, 0.0}, to_start});
   out.glues.push_back({YarnPoint{nseg - 1, 1.0}, to_end});
-  out.glue_gap_cm.push_back(
-      (out.control_points.middleCols<4>(to_start.segment) * bspline_basis(to_start.t) - start)
-          .norm());
-  out.glue_gap_cm.push_back(
-      (out.control_points.middleCols<4>(to_end.segment) * bspline_basis(to_end.t) - end).norm());
   if (opt.bind_off)
     for (int col = 0; col < opt.cols; ++col)
       for (const Glue& g : bind_off_ties(out.control_points, out.stitch, out.piece,
-                                         {opt.rows - 1, col}, {opt.rows - 2, col})) {
+                                         {opt.rows - 1, col}, {opt.rows - 2, col}))
         out.glues.push_back(g);
-        const auto at = [&](const YarnPoint& p) -> Eigen::Vector3d {
-          return out.control_points.middleCols<4>(p.segment) * bspline_basis(p.t);
-        };
-        out.glue_gap_cm.push_back((at(g.a) - at(g.b)).norm());
-      }
+  for (const Glue& g : out.glues)
+    out.glue_gap_cm.push_back(
+        (yarn_point(out.control_points, g.a) - yarn_point(out.control_points, g.b)).norm());
 
   // centre: a flat piece on the origin, a tube on its axis (y centred)
   Eigen::Vector3d centre =
@@ -644,10 +642,7 @@ Model build_knit_model(const GeneratedKnit& knit, const Params& params, double r
   b.set_stitches(knit.stitch);
   for (Glue g : knit.glues) {
     if (glue_close_time > 0) {
-      auto at = [&](const YarnPoint& p) -> Eigen::Vector3d {
-        return knit.control_points.middleCols<4>(p.segment) * bspline_basis(p.t);
-      };
-      g.gap = at(g.a) - at(g.b);
+      g.gap = yarn_point(knit.control_points, g.a) - yarn_point(knit.control_points, g.b);
       g.close_time = glue_close_time;
     }
     b.add_glue(g);
