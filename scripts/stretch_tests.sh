@@ -4,8 +4,9 @@
 # model; then the elastic sheet (Baraff–Witkin), fitted to the stockinette's three runs at
 # small strain, pulled the same ways on each knit; one force–strain figure per direction
 # with every curve, and renders of each knit beside its sheet at the same strain.
-# Resumable: a relaxation or run that finished is kept, so run it again after an
-# interruption. Long (about an hour at 12×12 on 2 cores): run it in the background, e.g.
+# Resumable: a relaxation or run that finished is kept, and a yarn pull stopped partway
+# (interrupted, or killed with the machine) goes on from its latest sample
+# (`stretch --resume DIR`), so run it again after an interruption. Long (about an hour at 12×12 on 2 cores): run it in the background, e.g.
 #   nohup scripts/stretch_tests.sh > out/stretch.log 2>&1 &
 # Usage: scripts/stretch_tests.sh [--rows R] [--cols C] [--speed V] [--to E] [--wale-to E]
 #                                 [--threads N] [--friction MU] [--directions LIST] [--bind-off]
@@ -75,8 +76,16 @@ for p in stockinette garter rib2x2; do
   [ -f "$knit" ] || knit=$relax/final.kstate
   for d in ${directions//,/ }; do
     run=$root/${p}_$d
-    ended "$run" || $k stretch --from "$knit" --direction $d --to "$(strain_of $d)" \
-      --speed "$speed" "${yarn[@]}" -j "$threads" -q --overwrite --out "$run" || true
+    ended "$run" && continue
+    # a run stopped partway (interrupted, or killed with the machine) goes on where its
+    # curve ends; anything else starts afresh
+    again=(--overwrite)
+    [ -f "$run/stretch.csv" ] && [ -d "$run/frames" ] && again=(--resume "$run")
+    $k stretch --from "$knit" --direction $d --to "$(strain_of $d)" \
+      --speed "$speed" "${yarn[@]}" -j "$threads" -q "${again[@]}" --out "$run" ||
+      [ "${again[0]}" = --overwrite ] ||
+      $k stretch --from "$knit" --direction $d --to "$(strain_of $d)" \
+        --speed "$speed" "${yarn[@]}" -j "$threads" -q --overwrite --out "$run" || true
   done
 done
 

@@ -1,6 +1,7 @@
 // knitsim stretch PATTERN --direction course|wale|bias --to STRAIN --out DIR
 // knitsim stretch --from relaxed.kstate --direction … --out DIR
 // knitsim stretch --from relaxed.kstate --sheet [--fit RUN,RUN,RUN] --direction … --out DIR
+// knitsim stretch … --out DIR --resume DIR|STATE   (go on with a stopped run)
 // knitsim stretch DIR1 DIR2 … --plot curves.png
 // A thin adapter over the stretch recipe (src/knit/recipes/stretch.hpp); a PATTERN is
 // first relaxed with the relax recipe's defaults.
@@ -24,7 +25,7 @@ namespace knitsim {
 void register_stretch(CLI::App& app) {
   struct Opts {
     std::vector<std::string> inputs;
-    std::string from, out, plot, direction = "course", integrator;
+    std::string from, out, plot, direction = "course", integrator, resume;
     double time_step = 0;
     knit::StretchOptions stretch;
     knit::SheetStretchOptions sheet;
@@ -47,6 +48,10 @@ void register_stretch(CLI::App& app) {
   cmd->add_option("--out,-o", o->out, "output directory");
   cmd->add_flag("--overwrite", o->overwrite,
                 "replace the files of an earlier run in the output directory");
+  cmd->add_option("--resume", o->resume,
+                  "go on with the stopped run in --out: from its final.kstate, one of its frames, "
+                  "or the directory itself (its latest state with a sample in stretch.csv); "
+                  "the same command otherwise");
   cmd->add_option("--plot", o->plot, "draw the force–strain curves of the given run directories");
   cmd->add_option("--direction,-d", o->direction, "course, wale or bias");
   cmd->add_option("--to", o->stretch.to_strain, "nominal strain to pull to (1 = doubled length)");
@@ -134,6 +139,20 @@ void register_stretch(CLI::App& app) {
       throw std::invalid_argument(
           "stretch --bind-off: binds off a PATTERN before relaxing it; a state --from keeps "
           "what it was knitted with (`knitsim relax --bind-off` makes one)");
+    if (!o->resume.empty()) {
+      if (o->use_sheet)
+        throw std::invalid_argument(
+            "stretch --resume: the sheet's runs take seconds; run them again instead");
+      if (o->from.empty()) {
+        // a PATTERN's run keeps the relaxed knit it pulled beside its curve
+        o->from = (std::filesystem::path(o->out) / "relaxed.kstate").string();
+        if (!std::filesystem::exists(o->from))
+          throw std::invalid_argument("stretch --resume: " + o->from +
+                                      ", the relaxed knit the run pulled, is missing: give it "
+                                      "with --from");
+        o->inputs.clear();
+      }
+    }
     o->stretch.direction = knit::parse_stretch_direction(o->direction);
     o->stretch.params.discretisation.contact_points = o->contact_points;
     if (cmd->count("--time-step")) o->stretch.params.solver.time_step = o->time_step;
@@ -155,8 +174,11 @@ void register_stretch(CLI::App& app) {
     o->stretch.progress = !o->quiet;
     o->stretch.write_frames = !o->no_frames;
     o->stretch.render = !o->no_render;
+    o->stretch.resume = o->resume;
+    o->stretch.resume_command = resume_command(o->out);
     add_provenance(o->stretch.extra);
-    knit::check_run_directory(o->out, o->overwrite);  // before a relaxation of minutes
+    // before a relaxation of minutes (a resumed run goes on in its own directory)
+    if (o->resume.empty()) knit::check_run_directory(o->out, o->overwrite);
     auto control = make_thread_control(o->threads);
     std::string from = o->from;
     std::string temp;

@@ -5,13 +5,17 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <csignal>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 
 #include "knit/io/plot.hpp"
 #include "knit/io/process.hpp"
 #include "knit/io/state_file.hpp"
+#include "knit/solver/interrupt.hpp"
 #include "recipes/relaxed_sample.hpp"
 
 namespace knit {
@@ -196,6 +200,108 @@ TEST(Stretch, HeldClampsBalanceAsNewtonSays) {
   EXPECT_EQ(t.rows.size(), 4u);
   EXPECT_EQ(t.rows[0][t.column("equilibrium", "stretch.csv")], 0.0);
   EXPECT_EQ(t.rows[3][t.column("equilibrium", "stretch.csv")], 1.0);
+}
+
+std::string file_text(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// A pull killed partway (its frames after the third gone, no summary, no final state) and
+// resumed from its directory ends where the uninterrupted pull ends, with the same curve;
+// a resume from an interrupt's final.kstate between two samples, too; a resume with
+// another speed, a held pull or --overwrite is refused before anything changes.
+TEST(Stretch, AKilledPullResumedFromItsDirectoryEndsAsTheWholeOne) {
+  const fs::path tmp = ::testing::TempDir();
+  StretchOptions o;
+  o.to_strain = 0.05;
+  o.output_strain = 0.01;
+  o.progress = false;
+  o.render = false;
+  o.overwrite = true;
+  o.out_dir = (tmp / "stretch_whole").string();
+  const StretchResult whole = stretch_knit(relaxed_sample(), o);
+  ASSERT_EQ(whole.report.summary["status"], "ok");
+  ASSERT_GE(whole.curve.size(), 6u);
+
+  // killed after its third sample: frames 3… and the end's files never written
+  const fs::path killed = tmp / "stretch_killed";
+  fs::remove_all(killed);
+  fs::copy(o.out_dir, killed, fs::copy_options::recursive);
+  for (const char* f : {"summary.json", "final.kstate", "stretch_force.png", "stretch_width.png"})
+    fs::remove(killed / f);
+  std::vector<fs::path> frames;
+  for (const auto& e : fs::directory_iterator(killed / "frames")) frames.push_back(e.path());
+  std::sort(frames.begin(), frames.end());
+  ASSERT_EQ(frames.size(), whole.curve.size());
+  for (size_t k = 3; k < frames.size(); ++k) fs::remove(frames[k]);
+  EXPECT_EQ(stretch_resume_state(killed.string()), frames[2].string());
+
+  StretchOptions again = o;
+  again.out_dir = killed.string();
+  again.overwrite = false;
+  again.resume = killed.string();
+  auto refused = [&](StretchOptions bad) {
+    try {
+      stretch_knit(relaxed_sample(), bad);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("(accepted)");
+  };
+  StretchOptions faster = again;
+  faster.speed = 10;
+  EXPECT_NE(refused(faster).find("strain"), std::string::npos) << refused(faster);
+  StretchOptions erase = again;
+  erase.overwrite = true;
+  EXPECT_NE(refused(erase).find("--overwrite"), std::string::npos) << refused(erase);
+  StretchOptions held = again;
+  held.hold_strain = 0.01;
+  EXPECT_NE(refused(held).find("held"), std::string::npos) << refused(held);
+  StretchOptions elsewhere = again;
+  elsewhere.resume = (fs::path(o.out_dir) / "final.kstate").string();
+  EXPECT_NE(refused(elsewhere).find("not a state of the run"), std::string::npos)
+      << refused(elsewhere);
+  EXPECT_EQ(fs::exists(killed / "summary.json"), false) << "a refused resume wrote its summary";
+
+  const StretchResult resumed = stretch_knit(relaxed_sample(), again);
+  ASSERT_EQ(resumed.report.summary["status"], "ok") << resumed.report.summary.dump(2);
+  EXPECT_EQ(resumed.report.summary["resumed_from"], frames[2].string());
+  const StateFile a = read_state_file(o.out_dir + "/final.kstate");
+  const StateFile b = read_state_file((killed / "final.kstate").string());
+  EXPECT_EQ(a.state.time, b.state.time);
+  EXPECT_TRUE(a.state.q == b.state.q);
+  EXPECT_TRUE(a.state.v == b.state.v);
+  EXPECT_EQ(file_text(o.out_dir + "/stretch.csv"), file_text((killed / "stretch.csv").string()));
+  ASSERT_EQ(resumed.curve.size(), whole.curve.size());
+  // the curve read back has stretch.csv's ten digits
+  const double work = whole.report.summary["stretch"]["work_erg"].get<double>();
+  EXPECT_NEAR(resumed.report.summary["stretch"]["work_erg"].get<double>(), work, 1e-8 * work);
+
+  // interrupted one step in (SIGINT): its final.kstate lies between two samples, and the
+  // next frame's sample takes the place of that state's
+  const fs::path stopped = tmp / "stretch_stopped";
+  StretchOptions first = o;
+  first.out_dir = stopped.string();
+  {
+    InterruptHandler handler;
+    request_interrupt(SIGINT);
+    const StretchResult r = stretch_knit(relaxed_sample(), first);
+    clear_interrupt();
+    ASSERT_EQ(r.report.summary["status"], "interrupted");
+    ASSERT_EQ(r.curve.size(), 2u);
+  }
+  EXPECT_EQ(stretch_resume_state(stopped.string()), (stopped / "final.kstate").string());
+  StretchOptions rest = again;
+  rest.out_dir = stopped.string();
+  rest.resume = (stopped / "final.kstate").string();
+  const StretchResult r = stretch_knit(relaxed_sample(), rest);
+  ASSERT_EQ(r.report.summary["status"], "ok") << r.report.summary.dump(2);
+  const StateFile c = read_state_file((stopped / "final.kstate").string());
+  EXPECT_TRUE(a.state.q == c.state.q);
+  EXPECT_EQ(file_text(o.out_dir + "/stretch.csv"), file_text((stopped / "stretch.csv").string()));
 }
 
 TEST(Stretch, BadOptionsAreRefusedBeforeAnythingIsWritten) {

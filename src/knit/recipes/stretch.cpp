@@ -170,6 +170,73 @@ void write_stretch_csv(const std::vector<StretchSample>& curve, const std::strin
 }
 
 namespace {
+// stretch.csv keeps ten significant digits
+bool same_time(double a, double b) {
+  return std::abs(a - b) <= 1e-8 * std::max(1.0, std::abs(b));
+}
+}  // namespace
+
+std::vector<StretchSample> read_stretch_csv(const std::string& path) {
+  const CsvTable t = read_csv(path);
+  const int time = t.column("time_s", path), strain = t.column("strain", path),
+            fixed = t.column("force_fixed_dyn", path), moving = t.column("force_moving_dyn", path),
+            width = t.column("width_cm", path), pe = t.column("potential_energy_erg", path),
+            ke = t.column("kinetic_energy_erg", path),
+            contact = t.column("min_contact_distance", path), curl = t.column("edge_curl", path),
+            residual = t.column("force_residual", path),
+            equilibrium = t.column("equilibrium", path);
+  std::vector<StretchSample> curve;
+  for (const std::vector<double>& row : t.rows) {
+    StretchSample s;
+    s.time = row[time];
+    s.strain = row[strain];
+    s.force_fixed = row[fixed];
+    s.force_moving = row[moving];
+    s.width = row[width];
+    s.potential_energy = row[pe];
+    s.kinetic_energy = row[ke];
+    s.min_contact_distance = row[contact];
+    s.edge_curl = row[curl];
+    s.force_residual = row[residual] < 0 ? std::numeric_limits<double>::quiet_NaN() : row[residual];
+    s.equilibrium = row[equilibrium] > 0.5;
+    curve.push_back(s);
+  }
+  return curve;
+}
+
+std::string stretch_resume_state(const std::string& out_dir) {
+  const fs::path dir(out_dir), csv = dir / "stretch.csv";
+  if (!fs::exists(csv))
+    throw std::invalid_argument("--resume " + out_dir +
+                                ": no stretch.csv there, so no curve to go on with (a run "
+                                "writes it from its first sample; stretch it again)");
+  const std::vector<StretchSample> curve = read_stretch_csv(csv.string());
+  if (curve.empty()) throw std::invalid_argument("--resume " + out_dir + ": stretch.csv is empty");
+  const double last = curve.back().time;
+  auto has_row = [&](double t) {
+    return std::any_of(curve.begin(), curve.end(),
+                       [t](const StretchSample& s) { return same_time(s.time, t); });
+  };
+  std::ifstream in(dir / "summary.json");
+  const nlohmann::json summary = nlohmann::json::parse(in, nullptr, false);
+  if (summary.is_object() && summary.value("status", "") == "interrupted" &&
+      fs::exists(dir / "final.kstate"))
+    return (dir / "final.kstate").string();
+  std::vector<std::string> frames;
+  if (fs::is_directory(dir / "frames"))
+    for (const auto& e : fs::directory_iterator(dir / "frames"))
+      if (e.path().extension() == ".kstate") frames.push_back(e.path().string());
+  std::sort(frames.rbegin(), frames.rend());
+  for (const std::string& f : frames) {
+    const double t = read_state_file(f).state.time;
+    if (t <= last + 1e-6 && has_row(t)) return f;
+  }
+  throw std::invalid_argument("--resume " + out_dir +
+                              ": no frame there has a sample in stretch.csv (frames/ holds " +
+                              std::to_string(frames.size()) + " states)");
+}
+
+namespace {
 
 // the strains the renders show: 0, 0.25, 0.5, 1 up to `to`, and `to` itself
 std::vector<double> render_strains(double to) {
@@ -373,6 +440,80 @@ std::string stretch_label(const StateFile& file, StretchDirection direction) {
          (file.knit && file.knit->bind_off ? ", bound off" : "");
 }
 
+namespace {
+
+// StretchOptions::resume: checks that the state and the curve so far belong to this pull,
+// puts the state into the scene and the curve into the result; returns the state's path
+std::string resume_stretch(const StretchOptions& o, Scene& scene, bool held,
+                           StretchResult& result) {
+  const std::string what = "--resume " + o.resume;
+  if (held)
+    throw std::invalid_argument(what +
+                                ": a held pull (--hold) cannot be resumed (FIRE's state is not "
+                                "in the frames); run it again");
+  if (o.out_dir.empty())
+    throw std::invalid_argument(what + ": give the run's directory (--out) to go on in");
+  if (o.overwrite)
+    throw std::invalid_argument(what + ": goes on with the run in " + o.out_dir +
+                                "; --overwrite would erase it");
+  std::error_code ec;
+  const bool dir = fs::is_directory(o.resume, ec);
+  if (dir && !fs::equivalent(o.resume, o.out_dir, ec))
+    throw std::invalid_argument(what + ": a directory to resume must be the run's --out " +
+                                o.out_dir);
+  const std::string path = dir ? stretch_resume_state(o.out_dir) : o.resume;
+  if (!resumes_in_place(path, o.out_dir))
+    throw std::invalid_argument(what + ": not a state of the run in " + o.out_dir +
+                                " (its final.kstate or frames/)");
+  const State state = read_state_file(path).state;
+  if (state.q.size() != scene.state.q.size())
+    throw std::invalid_argument(what + ": it holds " + std::to_string(state.q.size() / 3) +
+                                " control points, the knit pulled has " +
+                                std::to_string(scene.state.q.size() / 3));
+  const double h = scene.model.params.solver.time_step;
+  if (!(state.time < scene.duration - 0.5 * h))
+    throw std::invalid_argument(what + ": the state is at t = " + short_number(state.time) +
+                                " s, the end of the pull (" + short_number(scene.duration) +
+                                " s): nothing is left to run");
+  // the summary of an interrupted run says what it pulled
+  std::ifstream in(fs::path(o.out_dir) / "summary.json");
+  const nlohmann::json summary = nlohmann::json::parse(in, nullptr, false);
+  if (summary.is_object() && summary.contains("direction") && summary["direction"].is_string() &&
+      summary["direction"] != stretch_direction_name(o.direction))
+    throw std::invalid_argument(what + ": the run pulled along the " +
+                                summary["direction"].get<std::string>() + ", not the " +
+                                stretch_direction_name(o.direction));
+  if (summary.is_object() && summary.contains("cycles") && summary["cycles"].is_number() &&
+      summary["cycles"] != o.cycles)
+    throw std::invalid_argument(what + ": the run had --cycles " + summary["cycles"].dump());
+  // the curve so far, up to the state's sample
+  const fs::path csv = fs::path(o.out_dir) / "stretch.csv";
+  if (!fs::exists(csv))
+    throw std::invalid_argument(what + ": " + csv.string() +
+                                " is missing, so the curve so far is lost; stretch it again");
+  std::vector<StretchSample> curve = read_stretch_csv(csv.string());
+  while (!curve.empty() && curve.back().time > state.time + 0.5 * h) curve.pop_back();
+  if (curve.empty() || !same_time(curve.back().time, state.time))
+    throw std::invalid_argument(what + ": " + csv.string() +
+                                " has no sample at its time (t = " + short_number(state.time) +
+                                " s); resume from the run's directory "
+                                "to take the latest state that has one");
+  // the same pull: the moving clamp must be where the sample says it was
+  const Clamp& moving = scene.model.clamps[1];
+  const double strain =
+      moving.pose(state.time).translation.dot(result.axis) / result.initial_separation;
+  if (std::abs(strain - curve.back().strain) > 1e-6 * std::max(1.0, std::abs(strain)))
+    throw std::invalid_argument(
+        what + ": at t = " + short_number(state.time) + " s the run was at strain " +
+        short_number(curve.back().strain) + ", this pull would be at " + short_number(strain) +
+        ": resume with the run's own knit, --direction, --to, --speed and --cycles");
+  scene.state = state;
+  result.curve = std::move(curve);
+  return path;
+}
+
+}  // namespace
+
 StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions& opts) {
   // everything is validated before anything is written
   validate_stretch_options(opts);
@@ -435,10 +576,23 @@ StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions&
   Scene scene = stretch_scene(kstate_path, o, keyframes);
   scene.duration = static_cast<double>(steps) * h;
   scene.output_every = static_cast<int>(std::min<long long>(output_every, 1'000'000'000));
-  if (!o.out_dir.empty()) prepare_run_directory(o.out_dir, o.overwrite);
-
   const Clamp& moving = scene.model.clamps[1];
+  const std::string resumed_from = o.resume.empty() ? "" : resume_stretch(o, scene, held, result);
+  if (!o.out_dir.empty() && resumed_from.empty()) prepare_run_directory(o.out_dir, o.overwrite);
+
+  const fs::path csv_path = fs::path(o.out_dir) / "stretch.csv";
+  auto frame_of = [&](double time) {
+    const long long step = std::llround(time / h);
+    return (step + scene.output_every - 1) / scene.output_every;
+  };
   auto sample = [&](const StepData& data, const State& state) {
+    if (!result.curve.empty()) {
+      // the resumed state's sample was read back with the curve
+      if (state.time < result.curve.back().time + 0.5 * h) return;
+      // a run resumed from a state between two samples (an interrupt's final.kstate) writes
+      // its next frame over that state's: the sample goes with it
+      if (frame_of(state.time) == frame_of(result.curve.back().time)) result.curve.pop_back();
+    }
     StretchSample s;
     s.time = state.time;
     const double moved = moving.pose(state.time).translation.dot(axis);
@@ -458,6 +612,8 @@ StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions&
     s.force_residual = data.force_residual;
     s.equilibrium = held && state.time > 0.5 * h;
     result.curve.push_back(s);
+    // the curve so far is on disk at every sample: a killed run can be resumed
+    if (!o.out_dir.empty()) write_stretch_csv(result.curve, csv_path.string());
   };
 
   std::unique_ptr<Simulator> sim;
@@ -472,6 +628,8 @@ StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions&
   so.out_dir = o.out_dir;
   so.progress = o.progress;
   so.write_frames = o.write_frames;
+  so.continue_in_place = !resumed_from.empty();
+  so.resume_command = o.resume_command;
   RunOptions run = scene_run_options(scene, so);
   run.on_output = sample;
   if (held) run.before_output = [](Simulator& s, const State& st) { s.force_residual(st); };
@@ -489,6 +647,7 @@ StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions&
     run.extra["hold_time_s"] = static_cast<double>(hold_steps) * h;
     run.extra["hold_relax"] = fire ? "fire" : "damped";
   }
+  if (!resumed_from.empty()) run.extra["resumed_from"] = resumed_from;
   for (const auto& [k, v] : o.extra.items()) run.extra[k] = v;
   if (g.file.knit) {
     run.extra["pattern"] = g.file.knit->pattern;

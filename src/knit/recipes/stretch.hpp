@@ -54,6 +54,16 @@ struct StretchOptions {
   Params params = stretch_params();
   std::string out_dir;  ///< empty: write nothing
   bool overwrite = false;
+  /// Go on with the stopped run in out_dir (interrupted, or killed: stretch.csv grows with
+  /// every sample) from this state of it: its final.kstate, one of its frames, or out_dir
+  /// itself for the latest state it has a sample of (stretch_resume_state). The pull must be
+  /// the run's own (knit, direction, strain, speed, cycles: checked against the summary
+  /// when there is one and against the strain of the last sample); the curve so far is read
+  /// back from stretch.csv (rows after the state dropped) and the run goes on in place to
+  /// the same end. Continuous pulls only (a hold's FIRE state is not in the frames). With
+  /// yarn friction, the friction filter's warm start begins again at the resumed state.
+  std::string resume;
+  std::string resume_command;  ///< written into the summary of an interrupted run
   bool progress = true;
   bool write_frames = true;
   /// with out_dir and frames: renders of the sample at strains 0, 0.25, 0.5 and 1 (those up
@@ -149,6 +159,15 @@ StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions&
 /// holds.
 nlohmann::json stretch_measures(const std::vector<StretchSample>& curve, double to_strain,
                                 double initial_separation, double hold_strain = 0);
+
+/// The latest state of the stopped stretch run in `out_dir` that its stretch.csv has a
+/// sample of: final.kstate when the run was interrupted (its summary says so), else the
+/// last frame whose time has a row. Throws std::invalid_argument naming what is missing.
+std::string stretch_resume_state(const std::string& out_dir);
+
+/// Reads a stretch.csv written by write_stretch_csv (force_residual −1 reads as NaN).
+/// Throws std::runtime_error naming the file on malformed input.
+std::vector<StretchSample> read_stretch_csv(const std::string& path);
 
 /// Writes the samples as CSV: time_s, strain, force_fixed_dyn, force_moving_dyn, width_cm,
 /// potential_energy_erg, kinetic_energy_erg, min_contact_distance, edge_curl,
