@@ -10,6 +10,7 @@
 #   nohup scripts/stretch_tests.sh > out/stretch.log 2>&1 &
 # Usage: scripts/stretch_tests.sh [--rows R] [--cols C] [--speed V] [--to E] [--wale-to E]
 #                                 [--threads N] [--friction MU] [--directions LIST] [--bind-off]
+#                                 [--bias-bound]
 # --to is the strain of the course and bias pulls (default 1), --wale-to the wale pull's
 # (default 0.6: a stockinette's loops jam at about 0.8 along the wale, where the
 # inextensible yarn stops the pull and the run ends unstable). A run that ends unstable
@@ -23,6 +24,10 @@
 # --bind-off: the samples are knitted with their last row bound off (`relax --bind-off`),
 # so that the bias pull cannot ladder the top edge; relaxations and runs go to
 # out/stretch/RxC_bound.
+# --bias-bound: the course and wale pulls on live samples, the bias pulls on bound-off ones
+# (those of --bind-off, in out/stretch/RxC_bound/…): a bias pull from a corner ladders a live
+# top edge, while the course and wale clamps hold the edges that a bind-off would change.
+# The sheet and the figures then take each direction's runs from where they are.
 # --directions LIST: the yarn pulls to run now, a comma-separated subset of course,wale,bias
 # (default all three); the sheet and the figures wait until every yarn pull has ended.
 # KNITSIM=PATH runs another knitsim binary (e.g. a copy, so that a rebuild of build/ does
@@ -30,6 +35,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 rows=12 cols=12 speed=1 to=1.0 wale_to=0.6 threads=0 friction= directions=course,wale,bias bind_off=
+bias_bound=
 while [ $# -gt 0 ]; do
   case $1 in
     --rows) rows=$2; shift 2 ;;
@@ -41,6 +47,7 @@ while [ $# -gt 0 ]; do
     --friction) friction=$2; shift 2 ;;
     --directions) directions=$2; shift 2 ;;
     --bind-off) bind_off=--bind-off; shift ;;
+    --bias-bound) bias_bound=1; shift ;;
     *) echo "stretch_tests: unknown option '$1'" >&2; exit 2 ;;
   esac
 done
@@ -53,6 +60,10 @@ done
 k=${KNITSIM:-./build/knitsim}
 [ -n "${KNITSIM:-}" ] || [ -x build/knitsim ] || scripts/setup.sh
 [ -x "$k" ] || { echo "stretch_tests: KNITSIM=$k is not an executable" >&2; exit 2; }
+if [ -n "$bias_bound" ] && [ -n "$bind_off" ]; then
+  echo "stretch_tests: --bias-bound binds off the bias pulls' samples only; --bind-off all of them" >&2
+  exit 2
+fi
 relaxed=out/stretch/${rows}x${cols}${bind_off:+_bound}
 root=$relaxed
 yarn=()
@@ -60,23 +71,38 @@ if [ -n "$friction" ]; then
   root=$relaxed/friction_$friction
   yarn=(--yarn-friction "$friction" --alpha-small 0 --alpha-large 0 --end-mass-floor 0.5)
 fi
+bound=out/stretch/${rows}x${cols}_bound
+bound_root=$bound${friction:+/friction_$friction}
 mkdir -p "$root"
+# where each direction's samples and runs are: with --bias-bound the bias pulls' are bound off
+bias_bound() { [ -n "$bias_bound" ] && [ "$1" = bias ]; }
+relax_dir() { if bias_bound "$2"; then echo "$bound/$1_relax"; else echo "$relaxed/$1_relax"; fi; }
+yarn_run() { if bias_bound "$2"; then echo "$bound_root/$1_$2"; else echo "$root/$1_$2"; fi; }
+sheet_run() { if bias_bound "$2"; then echo "$root/$1_$2_bound_sheet"; else echo "$root/$1_$2_sheet"; fi; }
+relaxed_knit() {
+  if [ -f "$1/relaxed.kstate" ]; then echo "$1/relaxed.kstate"; else echo "$1/final.kstate"; fi
+}
 done_ok() { [ -f "$1/summary.json" ] && grep -q '"status": "ok"' "$1/summary.json"; }
 # a run that ended (ok or unstable) and wrote its curve; an interrupted one goes again
-ended() { [ -f "$1/stretch.csv" ] && ! grep -q '"status": "interrupted"' "$1/summary.json"; }
+ended() {
+  [ -f "$1/stretch.csv" ] && [ -f "$1/summary.json" ] && ! grep -q '"status": "interrupted"' "$1/summary.json"
+}
 strain_of() { if [ "$1" = wale ]; then echo "$wale_to"; else echo "$to"; fi; }
 
 for p in stockinette garter rib2x2; do
-  relax=$relaxed/${p}_relax
-  if [ ! -f "$relax/final.kstate" ] || ! done_ok "$relax"; then
-    $k relax $p --rows "$rows" --cols "$cols" $bind_off --max-time 1 -j "$threads" -q --overwrite \
-      --out "$relax"
-  fi
-  knit=$relax/relaxed.kstate
-  [ -f "$knit" ] || knit=$relax/final.kstate
   for d in ${directions//,/ }; do
-    run=$root/${p}_$d
+    relax=$(relax_dir $p $d)
+    if [ ! -f "$relax/final.kstate" ] || ! done_ok "$relax"; then
+      mkdir -p "$(dirname "$relax")"
+      off=$bind_off
+      bias_bound $d && off=--bind-off
+      $k relax $p --rows "$rows" --cols "$cols" $off --max-time 1 -j "$threads" -q --overwrite \
+        --out "$relax"
+    fi
+    knit=$(relaxed_knit "$relax")
+    run=$(yarn_run $p $d)
     ended "$run" && continue
+    mkdir -p "$(dirname "$run")"
     # a run stopped partway (interrupted, or killed with the machine) goes on where its
     # curve ends; anything else starts afresh
     again=(--overwrite)
@@ -91,7 +117,7 @@ done
 
 missing=
 for p in stockinette garter rib2x2; do
-  for d in course wale bias; do ended "$root/${p}_$d" || missing="$missing ${p}_$d"; done
+  for d in course wale bias; do ended "$(yarn_run $p $d)" || missing="$missing ${p}_$d"; done
 done
 if [ -n "$missing" ]; then
   echo "stretch_tests: yarn pulls still to run:$missing; the sheet and the figures wait for them"
@@ -100,28 +126,25 @@ fi
 
 # the sheet: fitted once to the stockinette (its course run does the fit), then given
 # every knit's geometry with the fitted stiffnesses
-fit=$root/stockinette_course,$root/stockinette_wale,$root/stockinette_bias
-knit=$relaxed/stockinette_relax/relaxed.kstate
-[ -f "$knit" ] || knit=$relaxed/stockinette_relax/final.kstate
-first=$root/stockinette_course_sheet
-ended "$first" || $k stretch --from "$knit" --sheet --fit "$fit" --direction course --to "$to" \
-  --speed "$speed" -q --overwrite --out "$first"
+fit=$(yarn_run stockinette course),$(yarn_run stockinette wale),$(yarn_run stockinette bias)
+first=$(sheet_run stockinette course)
+ended "$first" || $k stretch --from "$(relaxed_knit "$(relax_dir stockinette course)")" --sheet \
+  --fit "$fit" --direction course --to "$to" --speed "$speed" -q --overwrite --out "$first"
 fitted() { grep -o "\"$1\": [0-9.e+-]*" "$first/summary.json" | head -n 1 | cut -d' ' -f2; }
 material=(--k-course "$(fitted k_stretch_u_dyn_per_cm)" --k-wale "$(fitted k_stretch_v_dyn_per_cm)"
           --k-shear "$(fitted k_shear_dyn_per_cm)")
 for p in stockinette garter rib2x2; do
-  knit=$relaxed/${p}_relax/relaxed.kstate
-  [ -f "$knit" ] || knit=$relaxed/${p}_relax/final.kstate
   for d in course wale bias; do
-    run=$root/${p}_${d}_sheet
-    ended "$run" || $k stretch --from "$knit" --sheet "${material[@]}" --direction $d \
-      --to "$(strain_of $d)" --speed "$speed" -q --overwrite --out "$run" || true
+    run=$(sheet_run $p $d)
+    ended "$run" || $k stretch --from "$(relaxed_knit "$(relax_dir $p $d)")" --sheet \
+      "${material[@]}" --direction $d --to "$(strain_of $d)" --speed "$speed" -q --overwrite \
+      --out "$run" || true
   done
 done
 
 for d in course wale bias; do
-  $k stretch $root/stockinette_$d $root/garter_$d $root/rib2x2_$d \
-    $root/stockinette_${d}_sheet $root/garter_${d}_sheet $root/rib2x2_${d}_sheet \
+  $k stretch $(yarn_run stockinette $d) $(yarn_run garter $d) $(yarn_run rib2x2 $d) \
+    $(sheet_run stockinette $d) $(sheet_run garter $d) $(sheet_run rib2x2 $d) \
     --plot "$root/curves_$d.png"
 done
 # each knit beside its sheet at the end of the course pull
