@@ -6,59 +6,37 @@ namespace {
 constexpr double BEND_EPS = 1e-14;  // cm² per unit parameter², far below any real |y'|²
 }
 
-double bending_kernel(const Vector12d& x, double rest_length, double k_bend,
-                      const QuadratureTable& quad, Vector12d* grad) {
-  double e = 0;
-  const double scale = k_bend * rest_length;
-  for (int k = 0; k < quad.size(); ++k) {
-    const Eigen::Vector3d d1 = combine(x, quad.db[k]);
-    const Eigen::Vector3d d2 = combine(x, quad.ddb[k]);
-    const Eigen::Vector3d c = d1.cross(d2);
-    const double s = d1.squaredNorm() + BEND_EPS;
-    const double inv_s3 = 1.0 / (s * s * s);
-    const double cc = c.squaredNorm();
-    e += quad.w[k] * cc * inv_s3;
-    if (grad) {
-      const double wk = scale * quad.w[k];
-      // ∂κ²/∂y' = 2 (y''×c)/s³ − 6 (c·c) y'/s⁴,   ∂κ²/∂y'' = 2 (c×y')/s³
-      const Eigen::Vector3d g1 = 2.0 * inv_s3 * d2.cross(c) - 6.0 * cc * inv_s3 / s * d1;
-      const Eigen::Vector3d g2 = 2.0 * inv_s3 * c.cross(d1);
-      scatter(*grad, quad.db[k], wk * g1);
-      scatter(*grad, quad.ddb[k], wk * g2);
-    }
-  }
-  return scale * e;
-}
-
-lanes::VecD bending_kernel_lanes(const lanes::VecD x[12], lanes::VecD rest_length, double k_bend,
-                                 const QuadratureTable& quad, lanes::VecD grad[12]) {
-  using lanes::VecD;
-  for (int c = 0; c < 12; ++c) grad[c] = VecD{};
-  VecD e{};
-  const VecD scale = k_bend * rest_length;
+template <class T>
+T bending_kernel_t(const T x[12], T rest_length, double k_bend, const QuadratureTable& quad,
+                   T* grad) {
+  if (grad)
+    for (int c = 0; c < 12; ++c) grad[c] = T{};
+  T e{};
+  const T scale = k_bend * rest_length;
   for (int k = 0; k < quad.size(); ++k) {
     const Eigen::Vector4d& db = quad.db[k];
     const Eigen::Vector4d& ddb = quad.ddb[k];
-    VecD d1[3], d2[3];
+    T d1[3], d2[3];  // y', y''
     for (int c = 0; c < 3; ++c) {
       d1[c] = db[0] * x[c] + db[1] * x[3 + c] + db[2] * x[6 + c] + db[3] * x[9 + c];
       d2[c] = ddb[0] * x[c] + ddb[1] * x[3 + c] + ddb[2] * x[6 + c] + ddb[3] * x[9 + c];
     }
-    const VecD cr[3] = {d1[1] * d2[2] - d1[2] * d2[1], d1[2] * d2[0] - d1[0] * d2[2],
-                        d1[0] * d2[1] - d1[1] * d2[0]};
-    const VecD s = d1[0] * d1[0] + d1[1] * d1[1] + d1[2] * d1[2] + BEND_EPS;
-    const VecD inv_s3 = 1.0 / (s * s * s);
-    const VecD cc = cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2];
-    e += quad.w[k] * cc * inv_s3;
-    const VecD wk = scale * quad.w[k];
+    const T cr[3] = {d1[1] * d2[2] - d1[2] * d2[1], d1[2] * d2[0] - d1[0] * d2[2],
+                     d1[0] * d2[1] - d1[1] * d2[0]};  // c = y' × y''
+    const T s = d1[0] * d1[0] + d1[1] * d1[1] + d1[2] * d1[2] + BEND_EPS;
+    const T inv_s3 = 1.0 / (s * s * s);
+    const T cc = cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2];
+    e += quad.w[k] * cc * inv_s3;  // κ² = |c|² / s³
+    if (!grad) continue;
+    const T wk = scale * quad.w[k];
     // ∂κ²/∂y' = 2 (y''×c)/s³ − 6 (c·c) y'/s⁴,   ∂κ²/∂y'' = 2 (c×y')/s³
-    const VecD two_inv_s3 = 2.0 * inv_s3;
-    const VecD six_cc = 6.0 * cc * inv_s3 / s;
-    const VecD d2xc[3] = {d2[1] * cr[2] - d2[2] * cr[1], d2[2] * cr[0] - d2[0] * cr[2],
-                          d2[0] * cr[1] - d2[1] * cr[0]};
-    const VecD cxd1[3] = {cr[1] * d1[2] - cr[2] * d1[1], cr[2] * d1[0] - cr[0] * d1[2],
-                          cr[0] * d1[1] - cr[1] * d1[0]};
-    VecD g1[3], g2[3];
+    const T two_inv_s3 = 2.0 * inv_s3;
+    const T six_cc = 6.0 * cc * inv_s3 / s;
+    const T d2xc[3] = {d2[1] * cr[2] - d2[2] * cr[1], d2[2] * cr[0] - d2[0] * cr[2],
+                       d2[0] * cr[1] - d2[1] * cr[0]};
+    const T cxd1[3] = {cr[1] * d1[2] - cr[2] * d1[1], cr[2] * d1[0] - cr[0] * d1[2],
+                       cr[0] * d1[1] - cr[1] * d1[0]};
+    T g1[3], g2[3];
     for (int c = 0; c < 3; ++c) {
       g1[c] = wk * (two_inv_s3 * d2xc[c] - six_cc * d1[c]);
       g2[c] = wk * (two_inv_s3 * cxd1[c]);
@@ -69,6 +47,25 @@ lanes::VecD bending_kernel_lanes(const lanes::VecD x[12], lanes::VecD rest_lengt
       for (int c = 0; c < 3; ++c) grad[3 * a + c] += ddb[a] * g2[c];
   }
   return scale * e;
+}
+
+template double bending_kernel_t<double>(const double[12], double, double, const QuadratureTable&,
+                                         double*);
+template lanes::VecD bending_kernel_t<lanes::VecD>(const lanes::VecD[12], lanes::VecD, double,
+                                                   const QuadratureTable&, lanes::VecD*);
+
+double bending_kernel(const Vector12d& x, double rest_length, double k_bend,
+                      const QuadratureTable& quad, Vector12d* grad) {
+  if (!grad) return bending_kernel_t<double>(x.data(), rest_length, k_bend, quad, nullptr);
+  Vector12d g;
+  const double e = bending_kernel_t<double>(x.data(), rest_length, k_bend, quad, g.data());
+  *grad += g;
+  return e;
+}
+
+lanes::VecD bending_kernel_lanes(const lanes::VecD x[12], lanes::VecD rest_length, double k_bend,
+                                 const QuadratureTable& quad, lanes::VecD grad[12]) {
+  return bending_kernel_t<lanes::VecD>(x, rest_length, k_bend, quad, grad);
 }
 
 double BendingEnergy::add_force(const Model& model, const Eigen::VectorXd& q,

@@ -9,13 +9,19 @@
 
 namespace knit {
 
-/// Bending energy of one segment with control points `x`; adds ∂E/∂x into *grad.
+/// The bending energy of one segment (T = double) or of lanes::LANES segments side by side
+/// (T = lanes::VecD, one segment per lane): x[c] is coordinate c of the segment's 12
+/// control-point coordinates; with `grad`, overwrites it with ∂E/∂x. Returns the energy.
+/// One formula for the scalar and the vector path (instantiated for both in bending.cpp).
+template <class T>
+T bending_kernel_t(const T x[12], T rest_length, double k_bend, const QuadratureTable& quad,
+                   T* grad);
+
+/// bending_kernel_t on one segment as an Eigen vector; adds ∂E/∂x into *grad.
 double bending_kernel(const Vector12d& x, double rest_length, double k_bend,
                       const QuadratureTable& quad, Vector12d* grad);
 
-/// bending_kernel for lanes::LANES segments at once, one per lane: x[c] is coordinate c of
-/// the 12 control-point coordinates of every lane's segment; overwrites grad with ∂E/∂x
-/// and returns every lane's energy. The same operations as bending_kernel, lane by lane.
+/// bending_kernel_t for lanes::LANES segments at once.
 lanes::VecD bending_kernel_lanes(const lanes::VecD x[12], lanes::VecD rest_length, double k_bend,
                                  const QuadratureTable& quad, lanes::VecD grad[12]);
 

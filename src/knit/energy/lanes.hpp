@@ -52,6 +52,11 @@ inline unsigned lane_bits(VecL m) {
 inline bool any(VecL m) {
   return lane_bits(m) != 0;
 }
+/// The square root of a double, so that a kernel templated over its number type (double
+/// or VecD) calls lanes::sqrt for both.
+inline double sqrt(double x) {
+  return __builtin_sqrt(x);
+}
 /// Lane-wise square root (the element-wise loop compiles to one vector instruction).
 inline VecD sqrt(VecD v) {
 #if defined(__AVX__)

@@ -11,39 +11,46 @@ namespace {
 constexpr double SPEED_EPS = 1e-24;  // regularises |y'| at y' = 0 (cm² per parameter²)
 }
 
-double length_kernel(const Vector12d& x, double rest_length, double k_len,
-                     const QuadratureTable& quad, Vector12d* grad) {
-  double e = 0;
-  const double inv_l = 1.0 / rest_length;
-  for (int k = 0; k < quad.size(); ++k) {
-    const Eigen::Vector3d d1 = combine(x, quad.db[k]);
-    const double speed = std::sqrt(d1.squaredNorm() + SPEED_EPS);
-    const double r = 1.0 - speed * inv_l;
-    e += quad.w[k] * r * r;
-    if (grad) scatter(*grad, quad.db[k], (-2.0 * k_len * quad.w[k] * r * inv_l / speed) * d1);
-  }
-  return k_len * e;
-}
-
-lanes::VecD length_kernel_lanes(const lanes::VecD x[12], lanes::VecD rest_length, double k_len,
-                                const QuadratureTable& quad, lanes::VecD grad[12]) {
-  using lanes::VecD;
-  for (int c = 0; c < 12; ++c) grad[c] = VecD{};
-  VecD e{};
-  const VecD inv_l = 1.0 / rest_length;
+template <class T>
+T length_kernel_t(const T x[12], T rest_length, double k_len, const QuadratureTable& quad,
+                  T* grad) {
+  if (grad)
+    for (int c = 0; c < 12; ++c) grad[c] = T{};
+  T e{};
+  const T inv_l = 1.0 / rest_length;
   for (int k = 0; k < quad.size(); ++k) {
     const Eigen::Vector4d& db = quad.db[k];
-    VecD d1[3];
+    T d1[3];  // y'
     for (int c = 0; c < 3; ++c)
       d1[c] = db[0] * x[c] + db[1] * x[3 + c] + db[2] * x[6 + c] + db[3] * x[9 + c];
-    const VecD speed = lanes::sqrt(d1[0] * d1[0] + d1[1] * d1[1] + d1[2] * d1[2] + SPEED_EPS);
-    const VecD r = 1.0 - speed * inv_l;
+    const T speed = lanes::sqrt(d1[0] * d1[0] + d1[1] * d1[1] + d1[2] * d1[2] + SPEED_EPS);
+    const T r = 1.0 - speed * inv_l;  // E = k_len Σ w (1 − |y'|/ℓ)²
     e += quad.w[k] * r * r;
-    const VecD coef = -2.0 * k_len * quad.w[k] * r * inv_l / speed;
+    if (!grad) continue;
+    const T coef = -2.0 * k_len * quad.w[k] * r * inv_l / speed;
     for (int a = 0; a < 4; ++a)
       for (int c = 0; c < 3; ++c) grad[3 * a + c] += db[a] * (coef * d1[c]);
   }
   return k_len * e;
+}
+
+template double length_kernel_t<double>(const double[12], double, double, const QuadratureTable&,
+                                        double*);
+template lanes::VecD length_kernel_t<lanes::VecD>(const lanes::VecD[12], lanes::VecD, double,
+                                                  const QuadratureTable&, lanes::VecD*);
+
+double length_kernel(const Vector12d& x, double rest_length, double k_len,
+                     const QuadratureTable& quad, Vector12d* grad) {
+  if (!grad) return length_kernel_t<double>(x.data(), rest_length, k_len, quad, nullptr);
+  Vector12d g;
+  const double e = length_kernel_t<double>(x.data(), rest_length, k_len, quad, g.data());
+  *grad += g;
+  return e;
+}
+
+lanes::VecD length_kernel_lanes(const lanes::VecD x[12], lanes::VecD rest_length, double k_len,
+                                const QuadratureTable& quad, lanes::VecD grad[12]) {
+  return length_kernel_t<lanes::VecD>(x, rest_length, k_len, quad, grad);
 }
 
 Matrix12d length_hessian(const Vector12d& x, double rest_length, double k_len,

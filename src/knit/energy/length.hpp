@@ -8,11 +8,16 @@
 
 namespace knit {
 
-/// Length energy of one segment; adds ∂E/∂x into *grad.
+/// The length energy of one segment (T = double) or of lanes::LANES segments side by side
+/// (T = lanes::VecD), as bending_kernel_t: one formula for both paths.
+template <class T>
+T length_kernel_t(const T x[12], T rest_length, double k_len, const QuadratureTable& quad, T* grad);
+
+/// length_kernel_t on one segment as an Eigen vector; adds ∂E/∂x into *grad.
 double length_kernel(const Vector12d& x, double rest_length, double k_len,
                      const QuadratureTable& quad, Vector12d* grad);
 
-/// length_kernel for lanes::LANES segments at once (see bending_kernel_lanes).
+/// length_kernel_t for lanes::LANES segments at once.
 lanes::VecD length_kernel_lanes(const lanes::VecD x[12], lanes::VecD rest_length, double k_len,
                                 const QuadratureTable& quad, lanes::VecD grad[12]);
 
