@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
+
 #include <cmath>
 #include <random>
 #include <string>
@@ -200,6 +202,78 @@ TEST(ContactKernel, CombinedResultAgreesWithParts) {
   Eigen::Vector3d total = Eigen::Vector3d::Zero();
   for (int a = 0; a < 4; ++a) total += r.force_i.segment<3>(3 * a) + r.force_j.segment<3>(3 * a);
   EXPECT_LE(total.norm(), 1e-10 * r.force_i.norm());
+}
+
+}  // namespace
+}  // namespace knit
+
+namespace knit {
+namespace {
+
+// The exact Hessian is the derivative of the gradient (central differences of
+// contact_pair_gradient); the projected one is positive semidefinite, drops only the
+// negative transverse part, and has the same normal stiffness: Δᵀ H Δ agrees along the
+// contact normals.
+TEST(ContactKernel, HessianMatchesFiniteDifferencesOfTheGradient) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-0.04, 0.04);
+  Vector12d xi = straight({0, 0, 0}, {1, 0, 0}, 0.3);
+  Vector12d xj = straight({0.02, 0, 0.15}, Eigen::Vector3d(1, 0.5, 0).normalized(), 0.3);
+  for (int k = 0; k < 12; ++k) {
+    xi[k] += u(rng);
+    xj[k] += u(rng);
+  }
+  const Params p;
+  const double li = 0.3, lj = 0.35;
+  const Eigen::Matrix<double, 24, 24> exact =
+      contact_pair_hessian(xi, xj, li, lj, p, quad10(), ContactHessian::EXACT);
+  const Eigen::Matrix<double, 24, 24> projected =
+      contact_pair_hessian(xi, xj, li, lj, p, quad10(), ContactHessian::PROJECTED);
+  ASSERT_GT(max_abs(exact.reshaped()), 0.0);
+  Eigen::Matrix<double, 24, 1> x;
+  x << xi, xj;
+  const double h = 1e-7;
+  double worst = 0;
+  for (int k = 0; k < 24; ++k) {
+    Eigen::Matrix<double, 24, 1> xp = x, xm = x;
+    xp[k] += h;
+    xm[k] -= h;
+    Vector12d gpi, gpj, gmi, gmj;
+    contact_pair_gradient(xp.head<12>(), xp.tail<12>(), li, lj, p, quad10(), gpi, gpj);
+    contact_pair_gradient(xm.head<12>(), xm.tail<12>(), li, lj, p, quad10(), gmi, gmj);
+    Eigen::Matrix<double, 24, 1> col;
+    col << (gpi - gmi) / (2 * h), (gpj - gmj) / (2 * h);
+    worst = std::max(worst, max_abs(col - exact.col(k)));
+  }
+  EXPECT_LT(worst, 1e-6 * max_abs(exact.reshaped())) << "largest difference " << worst;
+  EXPECT_LT(max_abs((exact - exact.transpose()).reshaped()), 1e-9 * max_abs(exact.reshaped()));
+  // projected: symmetric positive semidefinite, and at least as stiff as the exact one
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 24, 24>> eig(projected);
+  EXPECT_GT(eig.eigenvalues().minCoeff(), -1e-9 * eig.eigenvalues().maxCoeff());
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 24, 24>> eig_exact(exact);
+  EXPECT_LT(eig_exact.eigenvalues().minCoeff(), 0.0) << "the exact Hessian has no negative part";
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 24, 24>> diff(projected - exact);
+  EXPECT_GT(diff.eigenvalues().minCoeff(), -1e-9 * eig.eigenvalues().maxCoeff());
+  // a rigid translation of both segments has no stiffness
+  Eigen::Matrix<double, 24, 1> shift;
+  for (int k = 0; k < 8; ++k) shift.segment<3>(3 * k) = Eigen::Vector3d(0.3, -0.2, 0.5);
+  EXPECT_LT(max_abs(projected * shift), 1e-9 * max_abs(projected.reshaped()));
+  // beyond the contact distance, none
+  const Vector12d far = xj + Vector12d::Constant(5.0);
+  EXPECT_EQ(
+      max_abs(contact_pair_hessian(xi, far, li, lj, p, quad10(), ContactHessian::EXACT).reshaped()),
+      0.0);
+}
+
+TEST(ContactKernel, SecondDerivativeOfThePotential) {
+  for (double d : {0.1, 0.3, 0.7, 0.99}) {
+    const double h = 1e-6;
+    EXPECT_NEAR(contact_potential_d2(d),
+                (contact_potential_d1(d + h) - contact_potential_d1(d - h)) / (2 * h),
+                1e-6 * contact_potential_d2(d))
+        << "d = " << d;
+  }
+  EXPECT_EQ(contact_potential_d2(1.0), 0.0);
 }
 
 }  // namespace

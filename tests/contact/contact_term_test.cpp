@@ -431,3 +431,62 @@ TEST(ContactTerm, PushedYarnsNeverComeCloserThanHalfTheContactDistance) {
 
 }  // namespace
 }  // namespace knit
+
+namespace knit {
+namespace {
+
+// The stiffness operator of the IMEX_CONTACT step against a brute-force oracle: K x for
+// random x equals Σ over all non-neighbour segment pairs of the dense projected pair
+// Hessians (contact_pair_hessian) applied to x; its segment parts are the oracle's
+// blocks on each segment's own control points; and it is symmetric positive
+// semidefinite (xᵀ K y = yᵀ K x, xᵀ K x ≥ 0).
+TEST(ContactTerm, StiffnessOperatorMatchesTheDensePairHessians) {
+  const Sample s = pressed_patch();
+  const Model& m = s.model;
+  ContactTerm term(m);
+  term.set_operator_stiffness(true);
+  force_of(term, s, Eigen::VectorXd::Zero(s.q.size()));
+  ASSERT_GT(term.last_stats().point_pairs_in_contact, 50);
+  const int n = static_cast<int>(s.q.size());
+  Eigen::VectorXd oracle_x = Eigen::VectorXd::Zero(n), x = random_vector(n, 1.0, 11);
+  std::vector<Matrix12d> oracle_blocks(m.num_seg(), Matrix12d::Zero());
+  for (int i = 0; i < m.num_seg(); ++i)
+    for (int j = i + 1; j < m.num_seg(); ++j) {
+      if (m.neighbours(i, j)) continue;
+      const Eigen::Matrix<double, 24, 24> hess = contact_pair_hessian(
+          gather_segment(s.q, m.seg_cp[i]), gather_segment(s.q, m.seg_cp[j]), m.rest_length[i],
+          m.rest_length[j], m.params, m.contact_quad, ContactHessian::PROJECTED);
+      Eigen::Matrix<double, 24, 1> xij;
+      xij << x.segment<12>(3 * m.seg_cp[i]), x.segment<12>(3 * m.seg_cp[j]);
+      const Eigen::Matrix<double, 24, 1> y = hess * xij;
+      oracle_x.segment<12>(3 * m.seg_cp[i]) += y.head<12>();
+      oracle_x.segment<12>(3 * m.seg_cp[j]) += y.tail<12>();
+      oracle_blocks[i] += hess.topLeftCorner<12, 12>();
+      oracle_blocks[j] += hess.bottomRightCorner<12, 12>();
+    }
+  Eigen::VectorXd kx = Eigen::VectorXd::Zero(n);
+  term.add_stiffness_product(m, x, kx);
+  ASSERT_GT(max_abs(oracle_x), 0.0);
+  EXPECT_LT(max_abs(kx - oracle_x), 1e-9 * max_abs(oracle_x));
+  std::vector<Matrix12d> blocks(m.num_seg(), Matrix12d::Zero());
+  term.add_operator_segment_stiffness(m, blocks);
+  double worst = 0, scale = 0;
+  for (int i = 0; i < m.num_seg(); ++i) {
+    worst = std::max(worst, max_abs((blocks[i] - oracle_blocks[i]).reshaped()));
+    scale = std::max(scale, max_abs(oracle_blocks[i].reshaped()));
+  }
+  EXPECT_LT(worst, 1e-9 * scale);
+  const Eigen::VectorXd y = random_vector(n, 1.0, 12);
+  Eigen::VectorXd ky = Eigen::VectorXd::Zero(n);
+  term.add_stiffness_product(m, y, ky);
+  EXPECT_NEAR(x.dot(ky), y.dot(kx), 1e-9 * std::abs(x.dot(kx)));
+  EXPECT_GE(x.dot(kx), 0.0);
+  // off: the product is empty
+  term.set_operator_stiffness(false);
+  Eigen::VectorXd none = Eigen::VectorXd::Zero(n);
+  term.add_stiffness_product(m, x, none);
+  EXPECT_EQ(max_abs(none), 0.0);
+}
+
+}  // namespace
+}  // namespace knit

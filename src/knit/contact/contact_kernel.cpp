@@ -91,6 +91,38 @@ double contact_pair_gradient(const Vector12d& xi, const Vector12d& xj, double li
   return out.energy;
 }
 
+Eigen::Matrix<double, 24, 24> contact_pair_hessian(const Vector12d& xi, const Vector12d& xj,
+                                                   double li, double lj, const Params& params,
+                                                   const QuadratureTable& quad,
+                                                   ContactHessian kind) {
+  Eigen::Matrix<double, 24, 24> hess = Eigen::Matrix<double, 24, 24>::Zero();
+  const int n = quad.size();
+  const double two_r = 2.0 * params.material.radius;
+  const double kl = params.material.k_contact * li * lj;
+  for (int a = 0; a < n; ++a)
+    for (int b = 0; b < n; ++b) {
+      const Eigen::Vector3d diff = combine(xj, quad.b[b]) - combine(xi, quad.b[a]);
+      const double dist = diff.norm();
+      const double d = dist / two_r;
+      if (!(d < 1.0)) continue;
+      const double c = kl * quad.w[a] * quad.w[b];
+      const Eigen::Vector3d nhat = diff / dist;
+      const Eigen::Matrix3d nn = nhat * nhat.transpose();
+      Eigen::Matrix3d h = (c * contact_potential_d2(d) / (two_r * two_r)) * nn;
+      if (kind == ContactHessian::EXACT)
+        h += (c * contact_potential_d1(d) / (two_r * dist)) * (Eigen::Matrix3d::Identity() - nn);
+      // J_p: −B_a(t_a) on x_i's control points, +B_b(t_b) on x_j's
+      double coef[8];
+      for (int k = 0; k < 4; ++k) {
+        coef[k] = -quad.b[a][k];
+        coef[4 + k] = quad.b[b][k];
+      }
+      for (int p = 0; p < 8; ++p)
+        for (int q = 0; q < 8; ++q) hess.block<3, 3>(3 * p, 3 * q) += (coef[p] * coef[q]) * h;
+    }
+  return hess;
+}
+
 double contact_pair_damping(const Vector12d& xi, const Vector12d& xj, const Vector12d& vi,
                             const Vector12d& vj, double li, double lj, const Params& params,
                             const QuadratureTable& quad) {

@@ -47,6 +47,21 @@ inline double contact_potential_d1(double d) {
   return -2.0 / (d * d * d) + 2.0 * d;
 }
 
+/// f''(d) = 6/d⁴ + 2 for d < 1, 0 otherwise (f'' jumps at d = 1, where f and f' vanish).
+inline double contact_potential_d2(double d) {
+  if (!(d < 1.0)) return 0.0;
+  const double d2 = d * d;
+  return 6.0 / (d2 * d2) + 2.0;
+}
+
+/// Which Hessian contact_pair_hessian gives. Per point pair in contact, with Δ = y_j(t_b) −
+/// y_i(t_a), n̂ = Δ/|Δ| and c = k ℓ_i ℓ_j w_a w_b, the Hessian of c f(|Δ|/2r) in Δ is
+///   c f''(d)/(2r)² n̂n̂ᵀ + c f'(d)/(2r |Δ|) (I − n̂n̂ᵀ).
+/// f' < 0 inside the contact distance, so the transverse part is negative: EXACT keeps it,
+/// PROJECTED (positive semidefinite, for a Newton or linearly implicit step) drops it —
+/// the stiffness of the normal direction alone, what resists the tubes' approach.
+enum class ContactHessian { EXACT, PROJECTED };
+
 /// Result of one segment pair: energy, forces and a count of the point pairs in contact.
 struct ContactPairResult {
   double energy = 0;                      ///< E_ij (erg)
@@ -64,6 +79,14 @@ double contact_pair_energy(const Vector12d& xi, const Vector12d& xj, double li, 
 double contact_pair_gradient(const Vector12d& xi, const Vector12d& xj, double li, double lj,
                              const Params& params, const QuadratureTable& quad, Vector12d& grad_i,
                              Vector12d& grad_j);
+
+/// The 24×24 Hessian of E_ij in (x_i, x_j) (g/s² = dyn/cm), dense over all point pairs; a
+/// point pair's block is J_pᵀ H_p J_p with J_p the map from the 24 coordinates to Δ
+/// (−B_a(t_a) on x_i, B_b(t_b) on x_j) and H_p as ContactHessian says.
+Eigen::Matrix<double, 24, 24> contact_pair_hessian(const Vector12d& xi, const Vector12d& xj,
+                                                   double li, double lj, const Params& params,
+                                                   const QuadratureTable& quad,
+                                                   ContactHessian kind);
 
 /// Contact damping D_ij (erg/s) for control-point velocities vi, vj (cm/s).
 double contact_pair_damping(const Vector12d& xi, const Vector12d& xj, const Vector12d& vi,

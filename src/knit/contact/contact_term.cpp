@@ -72,6 +72,7 @@ void ContactTerm::resize(const Model& model) {
   m_pairs.resize(m_num_seg);
   m_rows.assign(m_num_seg, RowStats{});
   m_row_records.resize(m_num_seg);
+  m_row_stiff.resize(m_num_seg);
   m_bvh = Bvh{};
 }
 
@@ -293,6 +294,16 @@ void ContactTerm::pair_kernel(const Model& model, int i, int j, RowStats& row) {
     if (m_record)
       for (int kb = 0; kb < nb; ++kb)
         if (d2row[kb] < four_r2) m_row_records[i].push_back({i, a, j, jb[kb]});
+    if (m_stiffness)
+      for (int kb = 0; kb < nb; ++kb) {
+        if (!(d2row[kb] < four_r2)) continue;
+        const double dist = std::sqrt(d2row[kb]);
+        const double inv = 1.0 / dist;
+        const double d = dist * std::sqrt(inv_four_r2);
+        m_row_stiff[i].push_back({j, a, jb[kb], (bx[kb] - m_px[bi + a]) * inv,
+                                  (by[kb] - m_py[bi + a]) * inv, (bz[kb] - m_pz[bi + a]) * inv,
+                                  kl * quad.w[a] * bw[kb] * contact_potential_d2(d) * inv_four_r2});
+      }
   }
   // the smallest squared distance over all lanes is < 4r² exactly when some pair is in
   // contact, and then it is the smallest over the pairs in contact
@@ -404,6 +415,7 @@ double ContactTerm::add_force_bvh(const Model& model, const Eigen::VectorXd& q,
     for (int i = range.begin(); i < range.end(); ++i) {
       m_pairs[i].clear();
       if (m_record) m_row_records[i].clear();
+      if (m_stiffness) m_row_stiff[i].clear();
       RowStats& row = m_rows[i];
       row = RowStats{};
       if (rebuild) row.box_tests = m_list_box_tests[i];
@@ -449,6 +461,64 @@ double ContactTerm::add_force_bvh(const Model& model, const Eigen::VectorXd& q,
     for (const auto& rec : m_row_records)
       m_point_pairs.insert(m_point_pairs.end(), rec.begin(), rec.end());
   return energy;
+}
+
+void ContactTerm::set_operator_stiffness(bool on) {
+  if (on && m_culling != ContactCulling::BVH)
+    throw std::logic_error("the contact stiffness operator needs BVH culling");
+  m_stiffness = on;
+  if (!on)
+    for (auto& row : m_row_stiff) row.clear();
+}
+
+void ContactTerm::add_stiffness_product(const Model& model, const Eigen::VectorXd& x,
+                                        Eigen::VectorXd& y) const {
+  if (!m_stiffness) return;
+  const int rows = std::min<int>(m_num_seg, static_cast<int>(m_row_stiff.size()));
+  for (int i = 0; i < rows; ++i) {
+    const double* xi = x.data() + 3 * model.seg_cp[i];
+    double* yi = y.data() + 3 * model.seg_cp[i];
+    for (const StiffPair& p : m_row_stiff[i]) {
+      const double* xj = x.data() + 3 * model.seg_cp[p.j];
+      double* yj = y.data() + 3 * model.seg_cp[p.j];
+      const std::array<double, 4>& ba = m_basis[p.a];
+      const std::array<double, 4>& bb = m_basis[p.b];
+      // u = J x: the change of Δ = y_j(t_b) − y_i(t_a); K = J k n̂n̂ᵀ Jᵀ
+      double u[3] = {0, 0, 0};
+      for (int k = 0; k < 4; ++k)
+        for (int c = 0; c < 3; ++c) u[c] += bb[k] * xj[3 * k + c] - ba[k] * xi[3 * k + c];
+      const double s = p.k * (p.nx * u[0] + p.ny * u[1] + p.nz * u[2]);
+      const double f[3] = {s * p.nx, s * p.ny, s * p.nz};
+      for (int k = 0; k < 4; ++k)
+        for (int c = 0; c < 3; ++c) {
+          yj[3 * k + c] += bb[k] * f[c];
+          yi[3 * k + c] -= ba[k] * f[c];
+        }
+    }
+  }
+}
+
+void ContactTerm::add_operator_segment_stiffness(const Model& model,
+                                                 std::vector<Matrix12d>& blocks) const {
+  if (!m_stiffness) return;
+  const int rows = std::min<int>(m_num_seg, static_cast<int>(m_row_stiff.size()));
+  auto add = [](Matrix12d& block, const std::array<double, 4>& b, double k, const double n[3]) {
+    double nn[3][3];
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) nn[r][c] = k * n[r] * n[c];
+    for (int p = 0; p < 4; ++p)
+      for (int q = 0; q < 4; ++q) {
+        const double s = b[p] * b[q];
+        for (int r = 0; r < 3; ++r)
+          for (int c = 0; c < 3; ++c) block(3 * p + r, 3 * q + c) += s * nn[r][c];
+      }
+  };
+  for (int i = 0; i < rows; ++i)
+    for (const StiffPair& p : m_row_stiff[i]) {
+      const double n[3] = {p.nx, p.ny, p.nz};
+      add(blocks[i], m_basis[p.a], p.k, n);
+      add(blocks[p.j], m_basis[p.b], p.k, n);
+    }
 }
 
 void ContactTerm::record(StepData& data) const {

@@ -129,6 +129,19 @@ class ContactTerm : public Term {
   /// evaluation (brute force leaves the pair list empty).
   void record(StepData& data) const override;
 
+  /// The contact energy's projected Hessian (ContactHessian::PROJECTED: per point pair in
+  /// contact, its normal stiffness c f''(d)/(2r)² along n̂) as an operator, for the
+  /// IMEX_CONTACT integrator. Needs BVH culling (std::logic_error otherwise).
+  bool has_operator_stiffness() const override { return true; }
+  void set_operator_stiffness(bool on) override;
+  /// y += K x for the point pairs in contact at the last evaluation (serial, fixed order).
+  void add_stiffness_product(const Model& model, const Eigen::VectorXd& x,
+                             Eigen::VectorXd& y) const override;
+  /// Per point pair, k (B_a B_aᵀ) ⊗ n̂n̂ᵀ into segment i's block and k (B_b B_bᵀ) ⊗ n̂n̂ᵀ
+  /// into j's: the operator without its coupling of i to j.
+  void add_operator_segment_stiffness(const Model& model,
+                                      std::vector<Matrix12d>& blocks) const override;
+
   /// When on, each evaluation records its point pairs in contact (slow; for tests).
   void set_record_point_pairs(bool on) { m_record = on; }
   /// The point pairs in contact of the last evaluation with recording on, sorted.
@@ -142,6 +155,12 @@ class ContactTerm : public Term {
     double min_d2 = 0;             // smallest squared distance of a point pair in contact (cm²)
     Eigen::Vector3d delta;         // y_j − y_i at that point pair (cm)
     int point_a = 0, point_b = 0;  // its contact points on i and on j
+  };
+  // a point pair in contact of row i's segment pair (i, j): its points, its normal and
+  // normal stiffness k = c f''(d)/(2r)² (dyn/cm)
+  struct StiffPair {
+    int j = 0, a = 0, b = 0;
+    double nx = 0, ny = 0, nz = 0, k = 0;
   };
   // per-segment (row) outputs of the kernel stage
   struct RowStats {
@@ -166,6 +185,7 @@ class ContactTerm : public Term {
   int m_points = 0;
   bool m_has_velocity = false;
   bool m_record = false;
+  bool m_stiffness = false;
   // contact points and velocities, structure of arrays, index segment·P + a
   std::vector<double> m_px, m_py, m_pz, m_vx, m_vy, m_vz;
   std::vector<std::array<double, 4>> m_basis;  // B_0..3(t_a) per contact point
@@ -187,6 +207,7 @@ class ContactTerm : public Term {
   std::vector<std::vector<PairForce>> m_pairs;  // per segment i: pairs (i, j > i) in contact
   std::vector<RowStats> m_rows;
   std::vector<std::vector<ContactPointPair>> m_row_records;
+  std::vector<std::vector<StiffPair>> m_row_stiff;  // per row i, with m_stiffness
   std::vector<ContactPointPair> m_point_pairs;
   mutable std::vector<long long> m_record_offset;  // record(): first pair of each row
   SegmentAccumulator m_accumulator;

@@ -35,6 +35,21 @@ class Term {
   /// segment i; resized here).
   virtual void segment_stiffness(const Model& model, const Eigen::VectorXd& q,
                                  std::vector<Matrix12d>& blocks) {}
+  /// True for a term whose stiffness couples segments far apart (yarn–yarn contact): the
+  /// IMEX_CONTACT integrator takes it implicitly by applying its stiffness rather than
+  /// assembling it. set_operator_stiffness(true) makes every later add_force keep what
+  /// add_stiffness_product needs; the force must then depend on the state at the step's
+  /// start alone.
+  virtual bool has_operator_stiffness() const { return false; }
+  virtual void set_operator_stiffness(bool on) {}
+  /// Where has_operator_stiffness and it is on: y += K x, with K ≈ ∂²E/∂q² (positive
+  /// semidefinite) at the q of the last add_force. x and y: 3 × control points.
+  virtual void add_stiffness_product(const Model& model, const Eigen::VectorXd& x,
+                                     Eigen::VectorXd& y) const {}
+  /// Where add_stiffness_product applies: adds into blocks[i] the part of that stiffness
+  /// on segment i's own four control points (the preconditioner of the solve).
+  virtual void add_operator_segment_stiffness(const Model& model,
+                                              std::vector<Matrix12d>& blocks) const {}
   /// Potential energy alone (erg) at `time`.
   virtual double energy(const Model& model, const Eigen::VectorXd& q, double time) {
     Eigen::VectorXd f = Eigen::VectorXd::Zero(q.size());
