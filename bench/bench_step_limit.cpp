@@ -10,7 +10,8 @@
 // Variants: full, no-filter, no-contact, no-bending, no-length, end-mass (the first two
 // and last two control points of each yarn get at least half an interior one's mass),
 // imex (the full model with the length energy taken implicitly: --integrator imex); join
-// them with '+' to change several at once (imex+no-contact).
+// them with '+' to change several at once (imex+no-contact); sim-bending gives the yarn the
+// simulation's bending stiffness (MODEL.md §8: k_bend 5 against the relaxation's 0.005).
 #include <CLI/CLI.hpp>
 #include <iostream>
 #include <regex>
@@ -43,6 +44,8 @@ Outcome run(const knit::Model& base, const knit::State& start, const std::string
     knit::apply_end_mass_floor(model, 0.5);
   }
   if (has("imex")) model.params.solver.integrator = knit::Integrator::IMEX;
+  if (has("imex-contact")) model.params.solver.integrator = knit::Integrator::IMEX_CONTACT;
+  if (has("sim-bending")) model.params.material.k_bend = knit::Params::simulation().material.k_bend;
   std::vector<std::unique_ptr<knit::Term>> terms;
   for (auto& t : knit::default_terms(model)) {
     const std::string name(t->name());

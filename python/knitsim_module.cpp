@@ -304,7 +304,7 @@ PYBIND11_MODULE(knitsim, m) {
       .def_property_readonly(
           "integrator",
           [](const Model& mo) { return std::string(integrator_name(mo.params.solver.integrator)); },
-          "\"explicit\" or \"imex\" (params {\"integrator\": ...}).")
+          "\"explicit\", \"imex\" or \"imex-contact\" (params {\"integrator\": ...}).")
       .def_property_readonly(
           "stitch", [](const Model& mo) { return stitch_array(mo.stitch); },
           "(num_seg, 2) int array: each segment's stitch (row, column); -1 where none.")

@@ -95,7 +95,9 @@ void add_integrator_option(CLI::App* cmd, std::string& integrator) {
   cmd->add_option("--integrator", integrator,
                   "explicit: explicit midpoint for every term (the reference); imex: the same "
                   "but the length energy taken by a linearly implicit Euler step, which lifts "
-                  "the time-step limit its stiffness sets (docs/model.md §5.2)")
+                  "the time-step limit its stiffness sets; imex-contact: yarn–yarn contact "
+                  "implicit too, which lifts the limit contact sets in simulation "
+                  "(docs/model.md §5.2)")
       ->check(CLI::IsMember(knit::integrator_names()));
 }
 

@@ -69,7 +69,7 @@ TEST(SceneErrors, NegativeOrNonFiniteParametersAreRejected) {
   expect_error(scene_with(R"(, "params": {"yarn_friction": 30})"), {"yarn_friction", "[0, 10]"});
   expect_error(scene_with(R"(, "params": {"k_len": "stiff"})"), {"params.k_len", "number"});
   expect_error(scene_with(R"(, "params": {"integrator": "implicit"})"),
-               {"params.integrator", "\"explicit\" or \"imex\"", "implicit"});
+               {"params.integrator", "\"explicit\", \"imex\" or \"imex-contact\"", "implicit"});
   EXPECT_EQ(parse_scene(nlohmann::json::parse(scene_with(R"(, "params": {"integrator": "imex"})")),
                         "scene.json")
                 .model.params.solver.integrator,

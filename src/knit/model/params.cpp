@@ -95,12 +95,21 @@ void validate_params(const Params& p) {
 }
 
 const char* integrator_name(Integrator integrator) {
-  return integrator == Integrator::IMEX ? "imex" : "explicit";
+  switch (integrator) {
+    case Integrator::IMEX:
+      return "imex";
+    case Integrator::IMEX_CONTACT:
+      return "imex-contact";
+    case Integrator::EXPLICIT:
+      break;
+  }
+  return "explicit";
 }
 
 const std::vector<std::string>& integrator_names() {
   static const std::vector<std::string> names = {integrator_name(Integrator::EXPLICIT),
-                                                 integrator_name(Integrator::IMEX)};
+                                                 integrator_name(Integrator::IMEX),
+                                                 integrator_name(Integrator::IMEX_CONTACT)};
   return names;
 }
 
@@ -108,7 +117,8 @@ Integrator parse_integrator(const std::string& name) {
   const std::vector<std::string>& names = integrator_names();
   for (size_t k = 0; k < names.size(); ++k)
     if (name == names[k]) return static_cast<Integrator>(k);
-  throw std::invalid_argument("expected \"explicit\" or \"imex\", got \"" + name + "\"");
+  throw std::invalid_argument("expected \"explicit\", \"imex\" or \"imex-contact\", got \"" + name +
+                              "\"");
 }
 
 }  // namespace knit

@@ -48,9 +48,18 @@ struct Discretisation {
 ///             length energy), which take one linearly implicit Euler step instead
 ///             (docs/model.md §5.2). Their stiffness along the yarn bounds the explicit
 ///             step (bench_step_limit); taken implicitly it no longer does.
-enum class Integrator { EXPLICIT, IMEX };
-/// "explicit" or "imex".
+///   IMEX_CONTACT  IMEX with yarn–yarn contact implicit too: its force at the step's start
+///             and its normal stiffness (the projected Hessian, contact_kernel.hpp) in the
+///             linear solve, which conjugate gradients solve with the length energy's band
+///             factor as the preconditioner. In simulation, contact is what bounds IMEX's step.
+enum class Integrator { EXPLICIT, IMEX, IMEX_CONTACT };
+/// "explicit", "imex" or "imex-contact".
 const char* integrator_name(Integrator integrator);
+/// Whether the integrator takes the stiff terms by a linearly implicit step (IMEX or
+/// IMEX_CONTACT).
+inline bool is_imex(Integrator integrator) {
+  return integrator != Integrator::EXPLICIT;
+}
 /// Every integrator's name, in enum order.
 const std::vector<std::string>& integrator_names();
 /// The integrator named `name`; throws std::invalid_argument naming the known ones.

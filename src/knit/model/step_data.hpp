@@ -125,6 +125,10 @@ struct StepData {
   std::vector<ConstraintRecord> static_constraints;
   // --- step records, of the step that produced it
   ProjectionRecord projection;
+  /// The IMEX_CONTACT step's conjugate-gradient solve: iterations, and the residual left
+  /// relative to the right-hand side (0 and 0 for the other integrators).
+  int solve_iterations = 0;
+  double solve_residual = 0;
   std::vector<ConstraintRecord> constraints;
   FrictionRecord friction;
   /// wall seconds per stage, summed since the simulator's timings were reset: each term's

@@ -308,6 +308,10 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
   int frames_written = 0;
   double contact_pairs_sum = 0;
   long long contact_samples = 0;
+  // the IMEX_CONTACT step's conjugate-gradient solves
+  long long solve_steps = 0, solve_iterations = 0;
+  int solve_iterations_max = 0;
+  double solve_residual_max = 0;
   double min_d = std::numeric_limits<double>::infinity();
   std::map<std::string, long long> warnings;
   // yarn–yarn friction over the run: pairs and stuck pairs summed over steps, energy
@@ -398,6 +402,12 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
       contact_pairs_sum += static_cast<double>(data.contact.point_pairs_in_contact);
       ++contact_samples;
       min_d = std::min(min_d, data.contact.min_distance_ratio);
+    }
+    if (data.solve_iterations > 0) {
+      ++solve_steps;
+      solve_iterations += data.solve_iterations;
+      solve_iterations_max = std::max(solve_iterations_max, data.solve_iterations);
+      solve_residual_max = std::max(solve_residual_max, data.solve_residual);
     }
     for (size_t o = 0; o < data.objects.size() && o < object_deepest.size(); ++o) {
       object_deepest[o] = std::max(object_deepest[o], data.objects[o].deepest_penetration);
@@ -498,6 +508,11 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
   nlohmann::json energies = nlohmann::json::object();
   for (const TermRecord& t : data.terms) energies[t.name] = t.energy;
   s["energies"] = energies;
+  if (solve_steps > 0)
+    s["implicit_solve"] = {{"steps", solve_steps},
+                           {"iterations_mean", static_cast<double>(solve_iterations) / solve_steps},
+                           {"iterations_max", solve_iterations_max},
+                           {"relative_residual_max", solve_residual_max}};
   if (contact_samples > 0) {
     s["contact_pairs_mean"] = contact_pairs_sum / contact_samples;
     s["min_contact_distance"] = finite_or_null(min_d);
