@@ -267,14 +267,19 @@ TEST(ContactTerm, RejectsANegativeCandidateMargin) {
 TEST(ContactTerm, ResultsDoNotDependOnThreadCount) {
   const Sample s = make(knit_like_sample(6, 6, 8, 0.125, 0.9));
   const Eigen::VectorXd v = random_vector(s.q.size(), 3.0, 21);
-  Eigen::VectorXd f1, f2;
+  const Eigen::VectorXd x = random_vector(s.q.size(), 1.0, 22);
+  Eigen::VectorXd f1, f2, k1 = Eigen::VectorXd::Zero(s.q.size()), k2 = k1;
+  std::vector<Matrix12d> b1(s.model.num_seg(), Matrix12d::Zero()), b2 = b1;
   double e1 = 0, e2 = 0;
   ContactStats st1, st2;
   {
     tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
     ContactTerm term(s.model);
+    term.set_operator_stiffness(true);
     f1 = force_of(term, s, v, &e1);
     st1 = term.last_stats();
+    term.add_stiffness_product(s.model, x, k1);
+    term.add_operator_segment_stiffness(s.model, b1);
   }
   {
     // an explicit arena: a global_control alone does not raise the concurrency of the
@@ -282,11 +287,17 @@ TEST(ContactTerm, ResultsDoNotDependOnThreadCount) {
     tbb::global_control two(tbb::global_control::max_allowed_parallelism, 2);
     tbb::task_arena(2).execute([&] {
       ContactTerm term(s.model);
+      term.set_operator_stiffness(true);
       force_of(term, s, v);  // the second evaluation keeps the candidate list
       f2 = force_of(term, s, v, &e2);
       st2 = term.last_stats();
+      term.add_stiffness_product(s.model, x, k2);
+      term.add_operator_segment_stiffness(s.model, b2);
     });
   }
+  // and the IMEX_CONTACT step's stiffness operator
+  for (int k = 0; k < k1.size(); ++k) ASSERT_EQ(k1[k], k2[k]) << dof_name(k);
+  for (int i = 0; i < s.model.num_seg(); ++i) ASSERT_TRUE(b1[i] == b2[i]) << "segment " << i;
   ASSERT_GT(st1.point_pairs_in_contact, 0);
   EXPECT_EQ(e1, e2);
   EXPECT_EQ(st1.point_pairs_in_contact, st2.point_pairs_in_contact);

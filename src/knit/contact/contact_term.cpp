@@ -475,50 +475,90 @@ void ContactTerm::add_stiffness_product(const Model& model, const Eigen::VectorX
                                         Eigen::VectorXd& y) const {
   if (!m_stiffness) return;
   const int rows = std::min<int>(m_num_seg, static_cast<int>(m_row_stiff.size()));
-  for (int i = 0; i < rows; ++i) {
-    const double* xi = x.data() + 3 * model.seg_cp[i];
-    double* yi = y.data() + 3 * model.seg_cp[i];
-    for (const StiffPair& p : m_row_stiff[i]) {
-      const double* xj = x.data() + 3 * model.seg_cp[p.j];
-      double* yj = y.data() + 3 * model.seg_cp[p.j];
-      const std::array<double, 4>& ba = m_basis[p.a];
-      const std::array<double, 4>& bb = m_basis[p.b];
-      // u = J x: the change of Δ = y_j(t_b) − y_i(t_a); K = J k n̂n̂ᵀ Jᵀ
-      double u[3] = {0, 0, 0};
-      for (int k = 0; k < 4; ++k)
-        for (int c = 0; c < 3; ++c) u[c] += bb[k] * xj[3 * k + c] - ba[k] * xi[3 * k + c];
-      const double s = p.k * (p.nx * u[0] + p.ny * u[1] + p.nz * u[2]);
-      const double f[3] = {s * p.nx, s * p.ny, s * p.nz};
-      for (int k = 0; k < 4; ++k)
-        for (int c = 0; c < 3; ++c) {
-          yj[3 * k + c] += bb[k] * f[c];
-          yi[3 * k + c] -= ba[k] * f[c];
-        }
+  m_row_product.resize(rows);
+  // per point pair: f = k n̂ (n̂·u), u = J x the change of Δ = y_j(t_b) − y_i(t_a); K x puts
+  // B_b f on j's control points and −B_a f on i's
+  tbb::parallel_for(tbb::blocked_range<int>(0, rows, 16), [&](const tbb::blocked_range<int>& r) {
+    for (int i = r.begin(); i < r.end(); ++i) {
+      const std::vector<StiffPair>& pairs = m_row_stiff[i];
+      std::vector<Eigen::Vector3d>& out = m_row_product[i];
+      out.resize(pairs.size());
+      const double* xi = x.data() + 3 * model.seg_cp[i];
+      for (size_t k = 0; k < pairs.size(); ++k) {
+        const StiffPair& p = pairs[k];
+        const double* xj = x.data() + 3 * model.seg_cp[p.j];
+        const std::array<double, 4>& ba = m_basis[p.a];
+        const std::array<double, 4>& bb = m_basis[p.b];
+        double u[3] = {0, 0, 0};
+        for (int c = 0; c < 4; ++c)
+          for (int d = 0; d < 3; ++d) u[d] += bb[c] * xj[3 * c + d] - ba[c] * xi[3 * c + d];
+        const double s = p.k * (p.nx * u[0] + p.ny * u[1] + p.nz * u[2]);
+        out[k] = Eigen::Vector3d(s * p.nx, s * p.ny, s * p.nz);
+      }
     }
-  }
+  });
+  // per segment, in a fixed order: its own rows' pairs (it is i), then the pairs of rows
+  // k < s that have it as j (each row's pairs are in ascending j)
+  m_product_accumulator.run(model, [&](int s, Vector12d& slot) {
+    if (s >= rows) return 0.0;
+    const std::vector<StiffPair>& own = m_row_stiff[s];
+    for (size_t k = 0; k < own.size(); ++k) {
+      const std::array<double, 4>& ba = m_basis[own[k].a];
+      for (int c = 0; c < 4; ++c) slot.segment<3>(3 * c) -= ba[c] * m_row_product[s][k];
+    }
+    for (int k : m_partners[s]) {
+      if (k >= s) break;
+      const std::vector<StiffPair>& row = m_row_stiff[k];
+      auto it = std::lower_bound(row.begin(), row.end(), s,
+                                 [](const StiffPair& p, int j) { return p.j < j; });
+      for (; it != row.end() && it->j == s; ++it) {
+        const std::array<double, 4>& bb = m_basis[it->b];
+        const Eigen::Vector3d& f = m_row_product[k][it - row.begin()];
+        for (int c = 0; c < 4; ++c) slot.segment<3>(3 * c) += bb[c] * f;
+      }
+    }
+    return 0.0;
+  });
+  m_product_accumulator.gather(model, y, 1.0);
 }
 
 void ContactTerm::add_operator_segment_stiffness(const Model& model,
                                                  std::vector<Matrix12d>& blocks) const {
   if (!m_stiffness) return;
   const int rows = std::min<int>(m_num_seg, static_cast<int>(m_row_stiff.size()));
-  auto add = [](Matrix12d& block, const std::array<double, 4>& b, double k, const double n[3]) {
+  // k (B Bᵀ) ⊗ n̂n̂ᵀ, its upper triangle of 3×3 blocks, then mirrored
+  auto add = [](Matrix12d& block, const std::array<double, 4>& b, const StiffPair& p) {
+    const double n[3] = {p.nx, p.ny, p.nz};
     double nn[3][3];
     for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 3; ++c) nn[r][c] = k * n[r] * n[c];
-    for (int p = 0; p < 4; ++p)
-      for (int q = 0; q < 4; ++q) {
-        const double s = b[p] * b[q];
+      for (int c = 0; c < 3; ++c) nn[r][c] = p.k * n[r] * n[c];
+    for (int u = 0; u < 4; ++u)
+      for (int v = u; v < 4; ++v) {
+        const double w = b[u] * b[v];
         for (int r = 0; r < 3; ++r)
-          for (int c = 0; c < 3; ++c) block(3 * p + r, 3 * q + c) += s * nn[r][c];
+          for (int c = 0; c < 3; ++c) block(3 * u + r, 3 * v + c) += w * nn[r][c];
       }
   };
-  for (int i = 0; i < rows; ++i)
-    for (const StiffPair& p : m_row_stiff[i]) {
-      const double n[3] = {p.nx, p.ny, p.nz};
-      add(blocks[i], m_basis[p.a], p.k, n);
-      add(blocks[p.j], m_basis[p.b], p.k, n);
+  // each segment's block from its own rows (it is i) and from the rows k < s that have it
+  // as j: in parallel, each block written by one task
+  tbb::parallel_for(tbb::blocked_range<int>(0, rows, 16), [&](const tbb::blocked_range<int>& r) {
+    for (int s = r.begin(); s < r.end(); ++s) {
+      Matrix12d block = Matrix12d::Zero();
+      for (const StiffPair& p : m_row_stiff[s]) add(block, m_basis[p.a], p);
+      for (int k : m_partners[s]) {
+        if (k >= s) break;
+        const std::vector<StiffPair>& row = m_row_stiff[k];
+        auto it = std::lower_bound(row.begin(), row.end(), s,
+                                   [](const StiffPair& p, int j) { return p.j < j; });
+        for (; it != row.end() && it->j == s; ++it) add(block, m_basis[it->b], *it);
+      }
+      for (int u = 0; u < 4; ++u)
+        for (int v = 0; v < u; ++v)
+          block.block<3, 3>(3 * u, 3 * v) = block.block<3, 3>(3 * v, 3 * u).transpose();
+      blocks[s] += block;
     }
+  });
+  (void)model;
 }
 
 void ContactTerm::record(StepData& data) const {

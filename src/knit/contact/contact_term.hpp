@@ -134,7 +134,8 @@ class ContactTerm : public Term {
   /// IMEX_CONTACT integrator. Needs BVH culling (std::logic_error otherwise).
   bool has_operator_stiffness() const override { return true; }
   void set_operator_stiffness(bool on) override;
-  /// y += K x for the point pairs in contact at the last evaluation (serial, fixed order).
+  /// y += K x for the point pairs in contact at the last evaluation (in parallel, in a
+  /// fixed order: the result does not depend on the thread count).
   void add_stiffness_product(const Model& model, const Eigen::VectorXd& x,
                              Eigen::VectorXd& y) const override;
   /// Per point pair, k (B_a B_aᵀ) ⊗ n̂n̂ᵀ into segment i's block and k (B_b B_bᵀ) ⊗ n̂n̂ᵀ
@@ -208,6 +209,9 @@ class ContactTerm : public Term {
   std::vector<RowStats> m_rows;
   std::vector<std::vector<ContactPointPair>> m_row_records;
   std::vector<std::vector<StiffPair>> m_row_stiff;  // per row i, with m_stiffness
+  // add_stiffness_product: per stiff pair k n̂ (n̂·J x), and the per-segment sums
+  mutable std::vector<std::vector<Eigen::Vector3d>> m_row_product;
+  mutable SegmentAccumulator m_product_accumulator;
   std::vector<ContactPointPair> m_point_pairs;
   mutable std::vector<long long> m_record_offset;  // record(): first pair of each row
   SegmentAccumulator m_accumulator;
