@@ -431,12 +431,30 @@ PYBIND11_MODULE(knitsim, m) {
 
   m.def(
       "relax",
-      [](const std::string& pattern, std::optional<int> rows, std::optional<int> cols,
+      [](std::string pattern, std::optional<int> rows, std::optional<int> cols,
          std::optional<bool> in_the_round, double max_time, double rest, double stitch_size,
          double shrink, int segments_per_stitch, const py::object& params, const std::string& out,
-         bool overwrite, bool progress, const State* resume, bool fire, double residual,
-         bool bind_off) {
+         bool overwrite, bool progress, const py::object& resume, bool fire, double residual,
+         std::optional<bool> bind_off) {
         RelaxKnitOptions o;
+        // resume: a State, or a .kstate path whose knit block gives the defaults (as
+        // `knitsim relax --resume FILE`)
+        std::optional<StateFile> resume_file;
+        if (py::isinstance<py::str>(resume)) {
+          resume_file = read_state_file(resume.cast<std::string>());
+          if (const auto& info = resume_file->knit) {
+            if (!rows) rows = info->rows;
+            if (!cols) cols = info->cols;
+            if (!in_the_round) in_the_round = info->in_the_round;
+            if (!bind_off) bind_off = info->bind_off;
+            if (pattern.empty()) pattern = info->pattern;
+          }
+        } else if (!resume.is_none() && !py::isinstance<State>(resume)) {
+          throw py::type_error("relax: resume is a knitsim.State or a .kstate path");
+        }
+        if (pattern.empty())
+          throw std::invalid_argument(
+              "relax: give a pattern (or resume from a .kstate that names its own)");
         if (is_knitout_path(pattern)) {
           // a knitting-machine program knits what it says: its size is the default
           const KnitoutPiece piece = load_knitout(pattern);
@@ -449,7 +467,7 @@ PYBIND11_MODULE(knitsim, m) {
         if (in_the_round) o.knit.in_the_round = *in_the_round;
         o.knit.stitch_size_cm = stitch_size;
         o.knit.segments_per_stitch = segments_per_stitch;
-        o.knit.bind_off = bind_off;
+        o.knit.bind_off = bind_off.value_or(false);
         o.shrink = shrink;
         o.params = params_over(o.params, params, "relax");
         o.run.max_time = max_time;
@@ -459,22 +477,30 @@ PYBIND11_MODULE(knitsim, m) {
         o.run.out_dir = out;
         o.run.overwrite = overwrite;
         o.run.progress = progress;
-        o.resume = resume;
+        State resumed;
+        if (resume_file) {
+          resumed = read_resumed_knit_state(resume.cast<std::string>(), pattern, o.knit);
+          o.resume = &resumed;
+        } else if (!resume.is_none()) {
+          o.resume = resume.cast<const State*>();
+        }
         auto k = std::make_unique<Knit>();
         k->result = run_interruptible([&] { return relax_knit(pattern, o); });
         return k;
       },
-      "pattern"_a, "rows"_a = py::none(), "cols"_a = py::none(), "in_the_round"_a = py::none(),
+      "pattern"_a = "", "rows"_a = py::none(), "cols"_a = py::none(), "in_the_round"_a = py::none(),
       "max_time"_a = 2.0, "rest"_a = 1e-5, "stitch_size"_a = 0.0, "shrink"_a = RELAX_SHRINK,
       "segments_per_stitch"_a = 8, "params"_a = py::none(), "out"_a = "", "overwrite"_a = false,
-      "progress"_a = false, "resume"_a = nullptr, "fire"_a = false, "residual"_a = 0.0,
-      "bind_off"_a = false,
+      "progress"_a = false, "resume"_a = py::none(), "fire"_a = false, "residual"_a = 0.0,
+      "bind_off"_a = py::none(),
       "Generates `pattern` (stockinette, garter, rib2x2, seed, … a chart file or a knitout "
       "program) at rows × cols (default 12 × 12, or the program's size) and relaxes it until it "
       "rests (kinetic energy per length below `rest` erg/cm, or with `residual` > 0 the force "
       "residual below `residual` cm/s²) or `max_time` s of simulated time. `fire`: relax by "
       "minimisation (FIRE; rest by the force residual, 1 cm/s² unless `residual` says). "
-      "`bind_off`: tie the last row's loops to the row below (a sewn bind-off). "
+      "`bind_off`: tie the last row's loops to the row below (a sewn bind-off). `resume`: go "
+      "on from a knitsim.State of the same knit, or from a .kstate path, whose knit (size, "
+      "flat or round, bind-off) is then the default and is checked. "
       "`params`: a dict of scene parameters over the relaxation's. With `out`, writes the run "
       "as `knitsim relax --out` does. Returns a Knit.");
 

@@ -85,6 +85,16 @@ def test_bind_off_ties_the_last_row(tmp_path):
     f = knitsim.read_state(str(tmp_path / "b" / "relaxed.kstate"))
     assert f.knit["bind_off"] is True
     assert knitsim.relax("stockinette", rows=3, cols=4, max_time=0.002).summary["bind_off"] is False
+    # resumed from its file, the knit keeps its pattern, size and bind-off; a mismatch is
+    # refused naming it
+    again = knitsim.relax(resume=str(tmp_path / "b" / "relaxed.kstate"), max_time=0.002)
+    assert again.summary["bind_off"] is True and again.summary["pattern"] == "stockinette"
+    assert again.summary["rows"] == 3 and again.summary["cols"] == 4
+    with pytest.raises(ValueError, match="bind-off"):
+        knitsim.relax(resume=str(tmp_path / "b" / "relaxed.kstate"), bind_off=False,
+                      max_time=0.002)
+    with pytest.raises(TypeError, match="resume"):
+        knitsim.relax("stockinette", resume=3)
 
 
 def test_state_arrays_are_views_of_the_state(small_knit):
