@@ -58,6 +58,19 @@ std::pair<Vector12d, Vector12d> crossing(double target, const Params& p, double 
   return {xi, xj};
 }
 
+// two skew segments, bent at random by up to 0.04 cm, crossing at d ≈ 0.4–1
+std::pair<Vector12d, Vector12d> curved_skew_pair(unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-0.04, 0.04);
+  Vector12d xi = straight({0, 0, 0}, {1, 0, 0}, 0.3);
+  Vector12d xj = straight({0.02, 0, 0.15}, Eigen::Vector3d(1, 0.5, 0).normalized(), 0.3);
+  for (int k = 0; k < 12; ++k) {
+    xi[k] += u(rng);
+    xj[k] += u(rng);
+  }
+  return {xi, xj};
+}
+
 // central differences of `energy` over the 24 coordinates of (xi, xj) against (gi, gj)
 template <class F>
 void expect_gradient_matches(F&& energy, const Vector12d& xi, const Vector12d& xj,
@@ -124,14 +137,7 @@ TEST(ContactKernel, GradientCloseCrossing) {
 
 TEST(ContactKernel, GradientCurvedSegmentsManyContacts) {
   // bent, skewed segments with point pairs spread over 0.4 < d < 1
-  std::mt19937 rng(3);
-  std::uniform_real_distribution<double> u(-0.04, 0.04);
-  Vector12d xi = straight({0, 0, 0}, {1, 0, 0}, 0.3);
-  Vector12d xj = straight({0.02, 0, 0.15}, Eigen::Vector3d(1, 0.5, 0).normalized(), 0.3);
-  for (int k = 0; k < 12; ++k) {
-    xi[k] += u(rng);
-    xj[k] += u(rng);
-  }
+  const auto [xi, xj] = curved_skew_pair(3);
   const Params p;
   const ContactPairResult r =
       contact_pair_force(xi, xj, Vector12d::Zero(), Vector12d::Zero(), 0.3, 0.35, p, quad10());
@@ -215,14 +221,7 @@ namespace {
 // negative transverse part, and has the same normal stiffness: Δᵀ H Δ agrees along the
 // contact normals.
 TEST(ContactKernel, HessianMatchesFiniteDifferencesOfTheGradient) {
-  std::mt19937 rng(7);
-  std::uniform_real_distribution<double> u(-0.04, 0.04);
-  Vector12d xi = straight({0, 0, 0}, {1, 0, 0}, 0.3);
-  Vector12d xj = straight({0.02, 0, 0.15}, Eigen::Vector3d(1, 0.5, 0).normalized(), 0.3);
-  for (int k = 0; k < 12; ++k) {
-    xi[k] += u(rng);
-    xj[k] += u(rng);
-  }
+  const auto [xi, xj] = curved_skew_pair(7);
   const Params p;
   const double li = 0.3, lj = 0.35;
   const Eigen::Matrix<double, 24, 24> exact =

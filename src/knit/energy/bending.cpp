@@ -1,5 +1,7 @@
 #include "knit/energy/bending.hpp"
 
+#include "knit/energy/segment_kernel.hpp"
+
 namespace knit {
 
 namespace {
@@ -56,11 +58,11 @@ template lanes::VecD bending_kernel_t<lanes::VecD>(const lanes::VecD[12], lanes:
 
 double bending_kernel(const Vector12d& x, double rest_length, double k_bend,
                       const QuadratureTable& quad, Vector12d* grad) {
-  if (!grad) return bending_kernel_t<double>(x.data(), rest_length, k_bend, quad, nullptr);
-  Vector12d g;
-  const double e = bending_kernel_t<double>(x.data(), rest_length, k_bend, quad, g.data());
-  *grad += g;
-  return e;
+  return on_one_segment(
+      [&](const double* xs, double* g) {
+        return bending_kernel_t<double>(xs, rest_length, k_bend, quad, g);
+      },
+      x, grad);
 }
 
 lanes::VecD bending_kernel_lanes(const lanes::VecD x[12], lanes::VecD rest_length, double k_bend,

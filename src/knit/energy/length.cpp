@@ -5,6 +5,8 @@
 
 #include <cmath>
 
+#include "knit/energy/segment_kernel.hpp"
+
 namespace knit {
 
 namespace {
@@ -41,11 +43,11 @@ template lanes::VecD length_kernel_t<lanes::VecD>(const lanes::VecD[12], lanes::
 
 double length_kernel(const Vector12d& x, double rest_length, double k_len,
                      const QuadratureTable& quad, Vector12d* grad) {
-  if (!grad) return length_kernel_t<double>(x.data(), rest_length, k_len, quad, nullptr);
-  Vector12d g;
-  const double e = length_kernel_t<double>(x.data(), rest_length, k_len, quad, g.data());
-  *grad += g;
-  return e;
+  return on_one_segment(
+      [&](const double* xs, double* g) {
+        return length_kernel_t<double>(xs, rest_length, k_len, quad, g);
+      },
+      x, grad);
 }
 
 lanes::VecD length_kernel_lanes(const lanes::VecD x[12], lanes::VecD rest_length, double k_len,
