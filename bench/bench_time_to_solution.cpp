@@ -102,7 +102,8 @@ int main(int argc, char** argv) {
   app.add_option("--scene", scene_path, "scene file (JSON)");
   app.add_option("--knit", knit_path, "place this relaxed knit (.kstate) in the scene");
   app.add_option("--time", duration, "simulated seconds per run");
-  app.add_option("--runs", runs_text, "comma-separated INTEGRATOR:H (explicit, imex or imex-contact; s)");
+  app.add_option("--runs", runs_text,
+                 "comma-separated INTEGRATOR:H (explicit, imex or imex-contact; s)");
   app.add_option("--reference", reference_text, "the reference run, INTEGRATOR:H");
   app.add_option("--threads", threads, "0 = all cores");
   app.add_option("--end-mass-floor", end_mass_floor,
