@@ -226,6 +226,7 @@ void register_stretch(CLI::App& app) {
                 << sh["newton_iterations"] << " Newton iterations in "
                 << result.report.summary["wall_time_s"] << " s; outputs in " << o->out << "/\n";
       if (!result.report.message.empty()) std::cerr << "knitsim: " << result.report.message << "\n";
+      end_if_interrupted(result.report);
     } else {
       print_report(result.report, o->out);
       end_if_interrupted(result.report);

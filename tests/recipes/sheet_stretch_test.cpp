@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -12,6 +13,7 @@
 #include "knit/io/state_file.hpp"
 #include "knit/sheet/embedding.hpp"
 #include "knit/sheet/sheet_solver.hpp"
+#include "knit/solver/interrupt.hpp"
 #include "recipes/relaxed_sample.hpp"
 
 namespace knit {
@@ -119,6 +121,26 @@ TEST(SheetStretch, ItsStiffnessesFitTheYarnModelsRuns) {
   std::ofstream(root / "bad" / "summary.json") << "{\"status\": \"ok\"}";
   EXPECT_THROW(fit_sheet_material(relaxed_sample(), {(root / "bad").string()}, base),
                std::invalid_argument);
+  // a signal stops a fit before it writes anything, and a sheet pull after its sample,
+  // with what it has and the status "interrupted"
+  {
+    InterruptHandler handler;
+    request_interrupt(SIGINT);
+    try {
+      fit_sheet_material(relaxed_sample(), runs, base);
+      ADD_FAILURE() << "the fit went on after SIGINT";
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find("interrupted"), std::string::npos) << e.what();
+    }
+    o.stretch.out_dir = (root / "stopped").string();
+    o.stretch.render = false;
+    const StretchResult stopped = stretch_sheet(relaxed_sample(), o);
+    clear_interrupt();
+    EXPECT_EQ(stopped.report.status, StepStatus::INTERRUPTED);
+    EXPECT_EQ(stopped.curve.size(), 1u);
+    std::ifstream in(root / "stopped" / "summary.json");
+    EXPECT_EQ(nlohmann::json::parse(in)["status"], "interrupted");
+  }
 }
 
 TEST(SheetStretch, BadOptionsAreRefusedBeforeAnythingIsWritten) {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -15,6 +16,7 @@
 #include "knit/io/state_file.hpp"
 #include "knit/sheet/embedding.hpp"
 #include "knit/sheet/sheet_solver.hpp"
+#include "knit/solver/interrupt.hpp"
 #include "knit/solver/simulator.hpp"
 
 namespace knit {
@@ -97,6 +99,10 @@ nlohmann::json material_json(const sheet::SheetMaterial& m) {
 // the sheet's force per unit strain at `strain` (from rest)
 double sheet_stiffness(const KnitSheet& ks, const StretchGeometry& g, const sheet::SheetMaterial& m,
                        double strain) {
+  // a fit solves the sheet many times before anything is written: stop at a signal
+  if (const int sig = interrupt_signal(); sig != 0)
+    throw std::runtime_error(std::string("sheet fit: interrupted by ") +
+                             (sig == SIGINT ? "SIGINT" : "SIGTERM") + ": nothing was written");
   sheet::SheetState state = sheet::rest_state(ks.mesh);
   const StaticSample s = solve_at(ks, g, m, strain, state);
   if (!s.converged)
@@ -240,7 +246,9 @@ StretchResult stretch_sheet(const std::string& kstate_path, const SheetStretchOp
   int newton = 0, failed = 0;
   StateFile frame = g.file;
   double path = 0;  // strain travelled by the moving clamp so far
+  int signal = 0;   // a SIGINT/SIGTERM ends the pull after its sample, with what it has
   for (size_t i = 0; i < strains.size(); ++i) {
+    if (i > 0 && (signal = interrupt_signal()) != 0) break;
     const double e = strains[i];
     StaticSample st;
     st.converged = true;
@@ -277,7 +285,8 @@ StretchResult stretch_sheet(const std::string& kstate_path, const SheetStretchOp
   if (o.progress) std::fprintf(stderr, "\n");
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
-  nlohmann::json summary = {{"status", failed == 0 ? "ok" : "not_converged"},
+  const char* status = signal != 0 ? "interrupted" : failed == 0 ? "ok" : "not_converged";
+  nlohmann::json summary = {{"status", status},
                             {"model", "sheet"},
                             {"direction", stretch_direction_name(o.direction)},
                             {"to_strain", o.to_strain},
@@ -306,16 +315,22 @@ StretchResult stretch_sheet(const std::string& kstate_path, const SheetStretchOp
                       {"embedded_points", emb.size()}};
   summary["stretch"] = stretch_measures(result.curve, o.to_strain, g.separation);
   for (const auto& [k, v] : o.extra.items()) summary[k] = v;
-  result.report.status = failed == 0 ? StepStatus::OK : StepStatus::NOT_CONVERGED;
+  result.report.status = signal != 0   ? StepStatus::INTERRUPTED
+                         : failed == 0 ? StepStatus::OK
+                                       : StepStatus::NOT_CONVERGED;
   result.report.message =
-      failed == 0 ? "" : std::to_string(failed) + " samples did not reach equilibrium";
+      signal != 0 ? std::string("interrupted by ") + (signal == SIGINT ? "SIGINT" : "SIGTERM") +
+                        " at strain " + short_number(result.curve.back().strain) + " (run it again)"
+      : failed == 0 ? ""
+                    : std::to_string(failed) + " samples did not reach equilibrium";
+  if (signal != 0) summary["message"] = result.report.message;
   result.report.summary = summary;
   if (!o.out_dir.empty()) {
     const fs::path dir(o.out_dir);
     if (o.write_frames) write_state_file((dir / "final.kstate").string(), frame);
     write_file_atomic((dir / "summary.json").string(), summary.dump(2) + "\n");
     write_stretch_outputs(o, result.curve, "sheet, " + stretch_label(g.file, o.direction),
-                          failed == 0);
+                          failed == 0 && signal == 0);
   }
   return result;
 }
