@@ -558,7 +558,6 @@ void ContactTerm::add_operator_segment_stiffness(const Model& model,
       blocks[s] += block;
     }
   });
-  (void)model;
 }
 
 void ContactTerm::record(StepData& data) const {
