@@ -208,6 +208,8 @@ void register_stretch(CLI::App& app) {
         }
         result = knit::stretch_sheet(from, o->sheet);
       } else {
+        for (const std::string& caveat : knit::stretch_caveats(o->stretch))
+          std::cerr << "knitsim: warning: " << caveat << "\n";
         result = knit::stretch_knit(from, o->stretch);
       }
     } catch (...) {

@@ -140,6 +140,29 @@ TEST(Stretch, YarnFrictionActsOnTheKnitsContacts) {
   EXPECT_EQ(r.report.summary["params"]["material"]["yarn_friction"].get<double>(), 0.3);
 }
 
+// imex-contact with yarn friction pulls another curve than the explicit step at the steps
+// it is for (README, Speed II): such a pull says so, in its summary; the others do not
+TEST(Stretch, APullKnownToMisleadSaysSoInItsSummary) {
+  StretchOptions o;
+  o.to_strain = 0.01;
+  o.progress = false;
+  o.params.material.yarn_friction = 0.3;
+  EXPECT_TRUE(stretch_caveats(o).empty());  // explicit
+  o.params.solver.integrator = Integrator::IMEX;
+  o.params.solver.time_step = 4e-4;
+  EXPECT_TRUE(stretch_caveats(o).empty());
+  o.params.solver.integrator = Integrator::IMEX_CONTACT;
+  o.params.material.yarn_friction = 0;
+  EXPECT_TRUE(stretch_caveats(o).empty());
+  o.params.material.yarn_friction = 0.3;
+  ASSERT_EQ(stretch_caveats(o).size(), 1u);
+  EXPECT_NE(stretch_caveats(o)[0].find("--integrator imex"), std::string::npos);
+  const StretchResult r = stretch_knit(relaxed_sample(), o);
+  ASSERT_EQ(r.report.summary["status"], "ok");
+  ASSERT_TRUE(r.report.summary.contains("caveats")) << r.report.summary.dump();
+  EXPECT_EQ(r.report.summary["caveats"][0], stretch_caveats(o)[0]);
+}
+
 // --from a relative path is read from the working directory (not from beside itself)
 TEST(Stretch, ARelativePathIsReadFromTheWorkingDirectory) {
   const fs::path sample = relaxed_sample(), cwd = fs::current_path();

@@ -107,6 +107,11 @@ struct StretchResult {
 /// range.
 void validate_stretch_options(const StretchOptions& options);
 
+/// What a user should know before trusting the curve of a pull with these options (empty
+/// when nothing): combinations that run but are known to give another curve than the
+/// explicit step. Written to the summary as "caveats"; the command prints them.
+std::vector<std::string> stretch_caveats(const StretchOptions& options);
+
 /// What a stretch test of a relaxed knit holds and measures, before it runs: the knit,
 /// its two clamps (the control points they hold and their centres), the pull axis (from
 /// the fixed clamp's centre to the moving one's), the initial separation of the centres,
