@@ -106,6 +106,7 @@ py::dict knit_info(const std::optional<KnitInfo>& k) {
   d["stitch_size_cm"] = k->stitch_size_cm;
   d["shrink"] = k->shrink;
   d["bind_off"] = k->bind_off;
+  d["cast_on"] = k->cast_on;
   return d;
 }
 
@@ -435,7 +436,7 @@ PYBIND11_MODULE(knitsim, m) {
          std::optional<bool> in_the_round, double max_time, double rest, double stitch_size,
          double shrink, int segments_per_stitch, const py::object& params, const std::string& out,
          bool overwrite, bool progress, const py::object& resume, bool fire, double residual,
-         std::optional<bool> bind_off) {
+         std::optional<bool> bind_off, std::optional<bool> cast_on) {
         RelaxKnitOptions o;
         // resume: a State, or a .kstate path whose knit block gives the defaults (as
         // `knitsim relax --resume FILE`)
@@ -447,6 +448,7 @@ PYBIND11_MODULE(knitsim, m) {
             if (!cols) cols = info->cols;
             if (!in_the_round) in_the_round = info->in_the_round;
             if (!bind_off) bind_off = info->bind_off;
+            if (!cast_on) cast_on = info->cast_on;
             if (pattern.empty()) pattern = info->pattern;
           }
         } else if (!resume.is_none() && !py::isinstance<State>(resume)) {
@@ -468,6 +470,7 @@ PYBIND11_MODULE(knitsim, m) {
         o.knit.stitch_size_cm = stitch_size;
         o.knit.segments_per_stitch = segments_per_stitch;
         o.knit.bind_off = bind_off.value_or(false);
+        o.knit.cast_on = cast_on.value_or(false);
         o.shrink = shrink;
         o.params = params_over(o.params, params, "relax");
         o.run.max_time = max_time;
@@ -492,15 +495,16 @@ PYBIND11_MODULE(knitsim, m) {
       "max_time"_a = 2.0, "rest"_a = 1e-5, "stitch_size"_a = 0.0, "shrink"_a = RELAX_SHRINK,
       "segments_per_stitch"_a = 8, "params"_a = py::none(), "out"_a = "", "overwrite"_a = false,
       "progress"_a = false, "resume"_a = py::none(), "fire"_a = false, "residual"_a = 0.0,
-      "bind_off"_a = py::none(),
+      "bind_off"_a = py::none(), "cast_on"_a = py::none(),
       "Generates `pattern` (stockinette, garter, rib2x2, seed, … a chart file or a knitout "
       "program) at rows × cols (default 12 × 12, or the program's size) and relaxes it until it "
       "rests (kinetic energy per length below `rest` erg/cm, or with `residual` > 0 the force "
       "residual below `residual` cm/s²) or `max_time` s of simulated time. `fire`: relax by "
       "minimisation (FIRE; rest by the force residual, 1 cm/s² unless `residual` says). "
-      "`bind_off`: tie the last row's loops to the row below (a sewn bind-off). `resume`: go "
-      "on from a knitsim.State of the same knit, or from a .kstate path, whose knit (size, "
-      "flat or round, bind-off) is then the default and is checked. "
+      "`bind_off`: tie the last row's loops to the row below (a sewn bind-off); `cast_on`: "
+      "tie the second row's loops to the first (a cast-on). `resume`: go on from a "
+      "knitsim.State of the same knit, or from a .kstate path, whose knit (size, flat or "
+      "round, bind-off, cast-on) is then the default and is checked. "
       "`params`: a dict of scene parameters over the relaxation's. With `out`, writes the run "
       "as `knitsim relax --out` does. Returns a Knit.");
 

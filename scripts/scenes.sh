@@ -19,14 +19,14 @@ cd "$(dirname "$0")/.."
 scene=${1:?usage: scripts/scenes.sh scarf|long-scarf|leg-warmer|leg-warmer-mesh [--threads N]}
 threads=0
 if [ "${2:-}" = --threads ]; then threads=${3:?--threads needs a number}; fi
-knit_args=() relax_args=()
+knit_args=() relax_args=() seq_times=()
 case $scene in
   scarf) knit_args=(garter --rows 160 --cols 20) file=examples/scarf_on_plane.json name=scarf relax=scarf ;;
   long-scarf) # 64k segments: the IMEX step (as the scene's own) makes its relaxation minutes, not hours
     knit_args=(garter --rows 400 --cols 20) relax_args=(--integrator imex --time-step 2.5e-4)
     file=examples/scarf_on_incline.json name=long_scarf relax=long_scarf ;;
   leg-warmer | leg-warmer-mesh)
-    knit_args=(rib2x2 --round --rows 96 --cols 44) relax=leg_warmer
+    knit_args=(rib2x2 --round --rows 96 --cols 44) relax=leg_warmer seq_times=(0.5 1 1.5 2)
     if [ "$scene" = leg-warmer ]; then file=examples/leg_warmer.json name=leg_warmer
     else file=examples/leg_warmer_mesh.json name=leg_warmer_mesh; fi ;;
   *) echo "scenes: unknown scene '$scene' (scarf, long-scarf, leg-warmer or leg-warmer-mesh)" >&2; exit 2 ;;
@@ -83,4 +83,24 @@ fi
 $k render "$run_dir/final.kstate" --view scene --color-rows --size 1280x960 --out "$run_dir/final.png"
 $k render "$run_dir/frames" --view scene --color-rows --size 640x480 --spp 2 --shadow-rays 2 \
   --ao-rays 2 --fps 30 --overwrite --out "$run_dir/movie"
-echo "scenes: $scene done: $run_dir/summary.json, $run_dir/final.png, $run_dir/movie/animation.mp4"
+# the movie's frames (time stamp, scale bar) at seq_times side by side: sequence.png
+seq=
+if [ ${#seq_times[@]} -gt 0 ]; then
+  frames=$(ls "$run_dir"/movie/frame_*.png | wc -l)
+  end=$(grep -o '"sim_time_s": [0-9.e+-]*' "$run_dir/summary.json" | cut -d' ' -f2)
+  inputs=()
+  for t in "${seq_times[@]}"; do
+    i=$(awk -v t="$t" -v n="$frames" -v T="$end" 'BEGIN { printf "%04d", int(t * (n - 1) / T + 0.5) }')
+    inputs+=(-i "$run_dir/movie/frame_$i.png")
+  done
+  # a white line between the panels
+  n=${#seq_times[@]} filter=
+  for ((p = 0; p < n; p++)); do
+    if [ $p -lt $((n - 1)) ]; then filter+="[$p]pad=iw+6:ih:0:0:white[p$p];"; else filter+="[$p]null[p$p];"; fi
+  done
+  for ((p = 0; p < n; p++)); do filter+="[p$p]"; done
+  ffmpeg -loglevel error -y "${inputs[@]}" -filter_complex "${filter}hstack=inputs=$n" \
+    "$run_dir/sequence.png"
+  seq=", $run_dir/sequence.png"
+fi
+echo "scenes: $scene done: $run_dir/summary.json, $run_dir/final.png$seq, $run_dir/movie/animation.mp4"

@@ -10,7 +10,8 @@
 #   nohup scripts/stretch_tests.sh > out/stretch.log 2>&1 &
 # Usage: scripts/stretch_tests.sh [--rows R] [--cols C] [--speed V] [--to E] [--wale-to E]
 #                                 [--threads N] [--friction MU] [--directions LIST] [--bind-off]
-#                                 [--bias-bound] [--sheet-directions LIST]
+#                                 [--bias-bound] [--cast-on] [--sheet-directions LIST]
+#                                 [--patterns LIST]
 # --to is the strain of the course and bias pulls (default 1), --wale-to the wale pull's
 # (default 0.6: a stockinette's loops jam at about 0.8 along the wale, where the
 # inextensible yarn stops the pull and the run ends unstable). A run that ends unstable
@@ -28,10 +29,16 @@
 # (those of --bind-off, in out/stretch/RxC_bound/…): a bias pull from a corner ladders a live
 # top edge, while the course and wale clamps hold the edges that a bind-off would change.
 # The sheet and the figures then take each direction's runs from where they are.
+# --cast-on (with --bind-off or --bias-bound): the bound-off samples have their first row
+# cast on too (`relax --cast-on`), so that a bias pull cannot draw the first row's yarn out
+# at the fixed corner either; they go to out/stretch/RxC_bound_cast.
 # --sheet-directions LIST: the sheet's fit and pulls in these directions only (default
 # course,wale,bias; course is needed). The bias fit and pulls of the sheet are slow at
 # 42×32 (one 12×12 bias sheet pull takes 200–300 s, 400× its course pull). The fit is
 # kept in the stockinette's course sheet run: remove the *_sheet runs after changing this.
+# --patterns LIST: the knits whose yarn pulls run now, a comma-separated subset of
+# stockinette,garter,rib2x2 (default all three; two instances with different patterns can
+# run side by side); the sheet and the figures wait until every yarn pull has ended.
 # --directions LIST: the yarn pulls to run now, a comma-separated subset of course,wale,bias
 # (default all three); the sheet and the figures wait until every yarn pull has ended.
 # KNITSIM=PATH runs another knitsim binary (e.g. a copy, so that a rebuild of build/ does
@@ -39,7 +46,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 rows=12 cols=12 speed=1 to=1.0 wale_to=0.6 threads=0 friction= directions=course,wale,bias bind_off=
-bias_bound= sheet_directions=course,wale,bias
+bias_bound= sheet_directions=course,wale,bias cast_on= patterns=stockinette,garter,rib2x2
 while [ $# -gt 0 ]; do
   case $1 in
     --rows) rows=$2; shift 2 ;;
@@ -52,6 +59,8 @@ while [ $# -gt 0 ]; do
     --directions) directions=$2; shift 2 ;;
     --bind-off) bind_off=--bind-off; shift ;;
     --bias-bound) bias_bound=1; shift ;;
+    --cast-on) cast_on=--cast-on; shift ;;
+    --patterns) patterns=$2; shift 2 ;;
     --sheet-directions) sheet_directions=$2; shift 2 ;;
     *) echo "stretch_tests: unknown option '$1'" >&2; exit 2 ;;
   esac
@@ -60,6 +69,12 @@ for d in ${directions//,/ }; do
   case $d in
     course | wale | bias) ;;
     *) echo "stretch_tests: --directions: unknown direction '$d' (course, wale, bias)" >&2; exit 2 ;;
+  esac
+done
+for p in ${patterns//,/ }; do
+  case $p in
+    stockinette | garter | rib2x2) ;;
+    *) echo "stretch_tests: --patterns: unknown pattern '$p' (stockinette, garter, rib2x2)" >&2; exit 2 ;;
   esac
 done
 k=${KNITSIM:-./build/knitsim}
@@ -79,14 +94,18 @@ if [ -n "$bias_bound" ] && [ -n "$bind_off" ]; then
   echo "stretch_tests: --bias-bound binds off the bias pulls' samples only; --bind-off all of them" >&2
   exit 2
 fi
-relaxed=out/stretch/${rows}x${cols}${bind_off:+_bound}
+if [ -n "$cast_on" ] && [ -z "$bind_off$bias_bound" ]; then
+  echo "stretch_tests: --cast-on casts on the bound-off samples: give --bind-off or --bias-bound" >&2
+  exit 2
+fi
+relaxed=out/stretch/${rows}x${cols}${bind_off:+_bound${cast_on:+_cast}}
 root=$relaxed
 yarn=()
 if [ -n "$friction" ]; then
   root=$relaxed/friction_$friction
   yarn=(--yarn-friction "$friction" --alpha-small 0 --alpha-large 0 --end-mass-floor 0.5)
 fi
-bound=out/stretch/${rows}x${cols}_bound
+bound=out/stretch/${rows}x${cols}_bound${cast_on:+_cast}
 bound_root=$bound${friction:+/friction_$friction}
 mkdir -p "$root"
 # where each direction's samples and runs are: with --bias-bound the bias pulls' are bound off
@@ -104,13 +123,14 @@ ended() {
 }
 strain_of() { if [ "$1" = wale ]; then echo "$wale_to"; else echo "$to"; fi; }
 
-for p in stockinette garter rib2x2; do
+for p in ${patterns//,/ }; do
   for d in ${directions//,/ }; do
     relax=$(relax_dir $p $d)
     if [ ! -f "$relax/final.kstate" ] || ! done_ok "$relax"; then
       mkdir -p "$(dirname "$relax")"
       off=$bind_off
       bias_bound $d && off=--bind-off
+      [ -n "$off" ] && off="$off $cast_on"
       $k relax $p --rows "$rows" --cols "$cols" $off --max-time 1 -j "$threads" -q --overwrite \
         --out "$relax"
     fi

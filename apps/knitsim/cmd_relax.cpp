@@ -62,6 +62,9 @@ void register_relax(CLI::App& app) {
   cmd->add_flag("--bind-off", o->knit.knit.bind_off,
                 "bind off the last row: tie each of its loops to the loop below where they cross, "
                 "as a sewn bind-off does, so that its loops cannot ladder when pulled");
+  cmd->add_flag("--cast-on", o->knit.knit.cast_on,
+                "cast on the first row: tie each loop of the second row where its legs cross the "
+                "first row's loop, so that a pull cannot draw the first row's yarn out");
   cmd->add_option("--stitch-size", o->knit.knit.stitch_size_cm,
                   "yarn length per stitch before shrinking (cm; 0 = default for the yarn; "
                   "working range " +
@@ -121,6 +124,7 @@ void register_relax(CLI::App& app) {
           o->knit.knit.segments_per_stitch = f.knit->segments_per_stitch;
         if (!given("--stitch-size")) o->knit.knit.stitch_size_cm = f.knit->stitch_size_cm;
         if (!given("--bind-off")) o->knit.knit.bind_off = f.knit->bind_off;
+        if (!given("--cast-on")) o->knit.knit.cast_on = f.knit->cast_on;
         if (!given("--shrink")) o->shrink = f.knit->shrink;
       } else if (o->pattern.empty()) {
         throw std::invalid_argument("--resume " + o->resume +

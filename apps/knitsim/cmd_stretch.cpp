@@ -112,6 +112,8 @@ void register_stretch(CLI::App& app) {
       ->check(CLI::Range(2, 1'000'000));
   cmd->add_flag("--bind-off", o->relax.knit.bind_off,
                 "bind off the PATTERN's last row before relaxing it (see `knitsim relax`)");
+  cmd->add_flag("--cast-on", o->relax.knit.cast_on,
+                "cast on the PATTERN's first row before relaxing it (see `knitsim relax`)");
   cmd->add_option("--relax-time", o->relax_time, "seconds of relaxation before the pull")
       ->check(finite_positive(knit::MAX_DURATION));
   add_threads_option(cmd, o->threads);
@@ -139,6 +141,10 @@ void register_stretch(CLI::App& app) {
       throw std::invalid_argument(
           "stretch --bind-off: binds off a PATTERN before relaxing it; a state --from keeps "
           "what it was knitted with (`knitsim relax --bind-off` makes one)");
+    if (o->relax.knit.cast_on && !o->from.empty())
+      throw std::invalid_argument(
+          "stretch --cast-on: casts on a PATTERN before relaxing it; a state --from keeps "
+          "what it was knitted with (`knitsim relax --cast-on` makes one)");
     if (!o->resume.empty()) {
       if (o->use_sheet)
         throw std::invalid_argument(

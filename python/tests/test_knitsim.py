@@ -97,6 +97,20 @@ def test_bind_off_ties_the_last_row(tmp_path):
         knitsim.relax("stockinette", resume=3)
 
 
+def test_cast_on_ties_the_first_row(tmp_path):
+    # a cast-on knit: two ties per loop of its second row; kept on resume, checked
+    k = knitsim.relax("garter", rows=3, cols=4, max_time=0.002, cast_on=True,
+                      out=str(tmp_path / "c"))
+    assert k.summary["cast_on"] is True and k.summary["bind_off"] is False
+    f = knitsim.read_state(str(tmp_path / "c" / "relaxed.kstate"))
+    assert f.knit["cast_on"] is True
+    again = knitsim.relax(resume=str(tmp_path / "c" / "relaxed.kstate"), max_time=0.002)
+    assert again.summary["cast_on"] is True
+    with pytest.raises(ValueError, match="cast-on"):
+        knitsim.relax(resume=str(tmp_path / "c" / "relaxed.kstate"), cast_on=False,
+                      max_time=0.002)
+
+
 def test_state_arrays_are_views_of_the_state(small_knit):
     s = small_knit.state.copy()
     q = s.q

@@ -398,6 +398,40 @@ TEST(Cli, BindOffIsKeptInTheStateFileAndOnResume) {
   EXPECT_FALSE(fs::exists(dir + "/s"));
 }
 
+// --cast-on as --bind-off: in the state file (with its ties, two per loop of the second
+// row), kept on --resume, a mismatch refused, and refused on a state --from
+TEST(Cli, CastOnIsKeptInTheStateFileAndOnResume) {
+  const std::string dir = temp_dir("cli_cast_on");
+  const std::string opts = " --quiet --no-frames --threads 1 --max-time 0.002";
+  ASSERT_EQ(
+      run("relax garter --rows 3 --cols 4 --cast-on" + opts + " --out " + dir + "/first").code, 0);
+  const std::string first = dir + "/first/relaxed.kstate";
+  const knit::StateFile f = knit::read_state_file(first);
+  ASSERT_TRUE(f.knit.has_value());
+  EXPECT_TRUE(f.knit->cast_on);
+  EXPECT_FALSE(f.knit->bind_off);
+  EXPECT_EQ(f.glues.size(), 2u + 2 * 4);
+  std::ifstream in(dir + "/first/summary.json");
+  EXPECT_EQ(nlohmann::json::parse(in)["cast_on"], true);
+  const Result alone = run("relax --resume " + first + opts + " --out " + dir + "/alone");
+  ASSERT_EQ(alone.code, 0) << alone.output;
+  const knit::StateFile a = knit::read_state_file(dir + "/alone/relaxed.kstate");
+  ASSERT_TRUE(a.knit.has_value());
+  EXPECT_TRUE(a.knit->cast_on);
+  EXPECT_EQ(a.glues.size(), f.glues.size());
+  ASSERT_EQ(run("relax garter --rows 3 --cols 4" + opts + " --out " + dir + "/live").code, 0);
+  const Result cast = run("relax garter --rows 3 --cols 4 --cast-on --resume " + dir +
+                          "/live/relaxed.kstate" + opts + " --out " + dir + "/cast");
+  EXPECT_EQ(cast.code, 1);
+  EXPECT_NE(cast.output.find("without a cast-on; give no --cast-on"), std::string::npos)
+      << cast.output;
+  EXPECT_FALSE(fs::exists(dir + "/cast"));
+  const Result stretch = run("stretch --from " + first + " --cast-on --out " + dir + "/s");
+  EXPECT_EQ(stretch.code, 1);
+  EXPECT_NE(stretch.output.find("--cast-on"), std::string::npos) << stretch.output;
+  EXPECT_FALSE(fs::exists(dir + "/s"));
+}
+
 }  // namespace
 
 namespace {

@@ -134,8 +134,9 @@ void write_state_file(const std::string& path, const StateFile& f) {
         {"segments_per_stitch", f.knit->segments_per_stitch},
         {"stitch_size_cm", f.knit->stitch_size_cm},
         {"shrink", f.knit->shrink},
-        {"bind_off",
-         f.knit->bind_off}}.dump();
+        {"bind_off", f.knit->bind_off},
+        {"cast_on",
+         f.knit->cast_on}}.dump();
     put<uint32_t>(out, static_cast<uint32_t>(info.size()));
     out.append(info);
     for (double l : f.rest_length) put<double>(out, l);
@@ -231,6 +232,7 @@ StateFile read_state_file(const std::string& path) {
       k.stitch_size_cm = info.at("stitch_size_cm").get<double>();
       k.shrink = info.at("shrink").get<double>();
       k.bind_off = info.value("bind_off", false);  // written since bind-offs exist
+      k.cast_on = info.value("cast_on", false);    // and since cast-ons exist
     } catch (const std::exception& e) {
       r.fail(std::string("bad knit description: ") + e.what());
     }

@@ -10,8 +10,9 @@
 //   f64 q[3·num_cp] | f64 v[3·num_cp]
 //   if stitches: per segment i32 row, i32 col
 //   if knit: u32 n | n bytes of JSON (pattern, rows, cols, in_the_round,
-//            segments_per_stitch, stitch_size_cm, shrink, bind_off; bind_off is
-//            absent from files written before it existed and reads as false)
+//            segments_per_stitch, stitch_size_cm, shrink, bind_off, cast_on; bind_off
+//            and cast_on are absent from files written before they existed and read as
+//            false)
 //            f64 rest_length[num_seg] (cm)
 //            u32 num_glues | per glue: i32 segment a, f64 t a, i32 segment b, f64 t b,
 //                                      f64 gap[3] (cm), f64 close_time (s)

@@ -116,6 +116,7 @@ struct KnitInfo {
   double stitch_size_cm = 0;  ///< 0 = the default for the yarn
   double shrink = 1;          ///< rest-length factor c the model was built with
   bool bind_off = false;      ///< the last row is bound off (KnitOptions::bind_off)
+  bool cast_on = false;       ///< the first row is cast on (KnitOptions::cast_on)
 };
 
 class ConstraintGroup;

@@ -396,6 +396,11 @@ void check_options(const Pattern& pattern, const KnitOptions& opt) {
         "knit option bind_off needs at least 2 rows (the last row is tied to the one below), "
         "got rows = " +
         std::to_string(opt.rows));
+  if (opt.cast_on && opt.rows < 2)
+    throw std::invalid_argument(
+        "knit option cast_on needs at least 2 rows (the second row is tied to the first), "
+        "got rows = " +
+        std::to_string(opt.rows));
   if (!(opt.radius > 0) || !std::isfinite(opt.radius))
     throw std::invalid_argument("knit option radius must be a positive length in cm, got " +
                                 std::to_string(opt.radius));
@@ -600,6 +605,13 @@ GeneratedKnit generate_knit(const Pattern& pattern_in, const KnitOptions& opt) {
     for (int col = 0; col < opt.cols; ++col)
       for (const Glue& g : bind_off_ties(out.control_points, out.stitch, out.piece,
                                          {opt.rows - 1, col}, {opt.rows - 2, col}))
+        out.glues.push_back(g);
+  // the cast-on: the same ties one row up from the bottom edge (the first row's heads are
+  // where the second row's legs cross them; with 2 rows and a bind-off, those ties twice)
+  if (opt.cast_on)
+    for (int col = 0; col < opt.cols; ++col)
+      for (const Glue& g :
+           bind_off_ties(out.control_points, out.stitch, out.piece, {1, col}, {0, col}))
         out.glues.push_back(g);
   for (const Glue& g : out.glues)
     out.glue_gap_cm.push_back(

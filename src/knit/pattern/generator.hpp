@@ -39,6 +39,11 @@ struct KnitOptions {
   /// cannot draw its loops out and ladder them down. Needs at least 2 rows. Off by default:
   /// the top loops are live, as on the needles.
   bool bind_off = false;
+  /// Secure the first row as a cast-on does: each loop of the second row is tied (glued)
+  /// where its two legs cross the head of the first row's loop below it, so that a pull
+  /// cannot draw the first row's yarn out of the fabric (the first row has no loops below
+  /// to hold it). Needs at least 2 rows. Off by default.
+  bool cast_on = false;
 };
 
 /// What part of the yarn a segment belongs to.
@@ -60,7 +65,8 @@ struct GeneratedKnit {
   std::vector<Glue> glues;          ///< each free end glued to its closest yarn point
                                     ///< (segment indices local to this yarn); with
                                     ///< bind_off, then the bind-off's ties, two per stitch
-                                    ///< of the last row in column order
+                                    ///< of the last row in column order; with cast_on, then
+                                    ///< the cast-on's, two per stitch of the second row
   double stitch_width_cm = 0;
   double row_height_cm = 0;
   double loop_depth_cm = 0;
@@ -73,8 +79,8 @@ struct GeneratedKnit {
   double min_distance_ratio = 0;
   int min_distance_segment_a = -1, min_distance_segment_b = -1;  ///< where it occurs
   /// gap |y(a) − y(b)| of each glue as generated (cm): the ends lie against the fabric,
-  /// about one yarn diameter from the point they are glued to; a bind-off tie's gap is
-  /// where the yarns cross and touch, about a yarn diameter.
+  /// about one yarn diameter from the point they are glued to; a bind-off or cast-on
+  /// tie's gap is where the yarns cross and touch, about a yarn diameter.
   std::vector<double> glue_gap_cm;
   int segments_per_turn = 0;
   int segments_per_tail = 0;

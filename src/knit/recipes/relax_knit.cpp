@@ -137,6 +137,10 @@ State read_resumed_knit_state(const std::string& path, const std::string& patter
       throw std::invalid_argument(
           "--resume " + path + ": it was knitted " + (options.bind_off ? "without" : "with") +
           " a bind-off; give " + (options.bind_off ? "no --bind-off" : "--bind-off") + " to go on");
+    if (f.knit->cast_on != options.cast_on)
+      throw std::invalid_argument("--resume " + path + ": it was knitted " +
+                                  (options.cast_on ? "without" : "with") + " a cast-on; give " +
+                                  (options.cast_on ? "no --cast-on" : "--cast-on") + " to go on");
   } else {
     // older files: the run that wrote the file names its pattern in its summary (DIR/ or
     // DIR/frames/)
@@ -193,7 +197,8 @@ KnitRelaxation setup_knit_relaxation(const std::string& pattern_name, const Rela
                         o.knit.segments_per_stitch,
                         o.knit.stitch_size_cm,
                         o.shrink,
-                        o.knit.bind_off};
+                        o.knit.bind_off,
+                        o.knit.cast_on};
   r.state = o.resume ? *o.resume : generated_state(r.knit);
   if (r.state.q.size() != model.num_dof() || r.state.v.size() != model.num_dof())
     throw std::invalid_argument("the state to resume from does not match the knit's size");
@@ -233,6 +238,7 @@ RelaxResult relax_knit(const std::string& pattern_name, const RelaxKnitOptions& 
                           {"segments_per_stitch", o.knit.segments_per_stitch},
                           {"shrink", o.shrink},
                           {"bind_off", o.knit.bind_off},
+                          {"cast_on", o.knit.cast_on},
                           {"contact_points", o.params.discretisation.contact_points},
                           {"k_global", model.params.material.k_global},
                           {"alpha_small", o.params.material.alpha_small},

@@ -437,7 +437,8 @@ void write_stretch_outputs(const StretchOptions& o, const std::vector<StretchSam
 std::string stretch_label(const StateFile& file, StretchDirection direction) {
   return std::string(file.knit ? file.knit->pattern + ", " : "") +
          stretch_direction_name(direction) +
-         (file.knit && file.knit->bind_off ? ", bound off" : "");
+         (file.knit && file.knit->bind_off ? ", bound off" : "") +
+         (file.knit && file.knit->cast_on ? ", cast on" : "");
 }
 
 namespace {
@@ -674,6 +675,7 @@ StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions&
   if (g.file.knit) {
     run.extra["pattern"] = g.file.knit->pattern;
     run.extra["bind_off"] = g.file.knit->bind_off;
+    run.extra["cast_on"] = g.file.knit->cast_on;
     run.extra["rows"] = g.file.knit->rows;
     run.extra["cols"] = g.file.knit->cols;
   }
@@ -717,6 +719,7 @@ std::string plot_stretch_runs(const std::vector<std::string>& dirs, const std::s
                                                              : std::string()) +
           s["direction"].get<std::string>();
       if (s.contains("bind_off") && s["bind_off"] == true) label += ", bound off";
+      if (s.contains("cast_on") && s["cast_on"] == true) label += ", cast on";
       if (s.contains("model") && s["model"] == "sheet") {
         label += ", sheet";
       } else if (s.contains("protocol") && s["protocol"] == "hold") {
