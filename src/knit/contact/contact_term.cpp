@@ -431,17 +431,13 @@ double ContactTerm::add_force_bvh(const Model& model, const Eigen::VectorXd& q,
   });
   m_timings.kernel = seconds_since(t);
 
-  // per-segment sums in a fixed order: own pairs (i, j > i), then pairs (k < i, i)
+  // per-segment sums in a fixed order: own pairs (i, j > i), then pairs (k < i, i) in
+  // ascending k
   t = Clock::now();
+  index_incoming_pairs(n);
   const double energy = m_accumulator.run(model, [&](int s, Vector12d& slot) {
     for (const PairForce& pf : m_pairs[s]) slot += pf.force_i;
-    for (int k : m_partners[s]) {
-      if (k >= s) break;
-      const std::vector<PairForce>& row = m_pairs[k];
-      const auto it = std::lower_bound(row.begin(), row.end(), s,
-                                       [](const PairForce& pf, int j) { return pf.j < j; });
-      if (it != row.end() && it->j == s) slot += it->force_j;
-    }
+    for (const Incoming& in : m_incoming[s]) slot += m_pairs[in.k][in.index].force_j;
     return m_rows[s].energy;
   });
   m_accumulator.gather(model, force, 1.0);
@@ -463,69 +459,100 @@ double ContactTerm::add_force_bvh(const Model& model, const Eigen::VectorXd& q,
   return energy;
 }
 
+void ContactTerm::index_incoming_pairs(int n) {
+  m_incoming.resize(n);
+  for (auto& list : m_incoming) list.clear();
+  for (int k = 0; k < n; ++k)
+    for (int p = 0; p < static_cast<int>(m_pairs[k].size()); ++p)
+      m_incoming[m_pairs[k][p].j].push_back({k, p});
+  if (!m_stiffness) return;
+  // the point pairs in one array, row by row
+  m_stiff_offset.resize(n + 1);
+  m_stiff_offset[0] = 0;
+  for (int i = 0; i < n; ++i)
+    m_stiff_offset[i + 1] = m_stiff_offset[i] + static_cast<int>(m_row_stiff[i].size());
+  const int total = m_stiff_offset[n];
+  m_stiff_pairs.resize(total);
+  tbb::parallel_for(tbb::blocked_range<int>(0, n, 256), [&](const tbb::blocked_range<int>& r) {
+    for (int i = r.begin(); i < r.end(); ++i)
+      std::copy(m_row_stiff[i].begin(), m_row_stiff[i].end(),
+                m_stiff_pairs.begin() + m_stiff_offset[i]);
+  });
+  // per segment, the point pairs that have it as j, in ascending index
+  m_stiff_in_offset.assign(n + 1, 0);
+  for (const StiffPair& p : m_stiff_pairs) ++m_stiff_in_offset[p.j + 1];
+  for (int i = 0; i < n; ++i) m_stiff_in_offset[i + 1] += m_stiff_in_offset[i];
+  m_stiff_in.resize(total);
+  m_stiff_fill.assign(m_stiff_in_offset.begin(), m_stiff_in_offset.end() - 1);
+  for (int p = 0; p < total; ++p) m_stiff_in[m_stiff_fill[m_stiff_pairs[p].j]++] = p;
+}
+
 void ContactTerm::set_operator_stiffness(bool on) {
   if (on && m_culling != ContactCulling::BVH)
     throw std::logic_error("the contact stiffness operator needs BVH culling");
   m_stiffness = on;
-  if (!on)
+  if (!on) {
     for (auto& row : m_row_stiff) row.clear();
+    m_stiff_pairs.clear();
+    m_stiff_offset.clear();
+    m_stiff_in_offset.clear();
+    m_stiff_in.clear();
+  }
 }
 
 void ContactTerm::add_stiffness_product(const Model& model, const Eigen::VectorXd& x,
                                         Eigen::VectorXd& y) const {
   if (!m_stiffness) return;
-  const int rows = std::min<int>(m_num_seg, static_cast<int>(m_row_stiff.size()));
-  m_row_product.resize(rows);
+  const int rows = std::min<int>(m_num_seg, static_cast<int>(m_stiff_offset.size()) - 1);
+  if (rows <= 0) return;  // no evaluation yet
+  m_stiff_product.resize(m_stiff_pairs.size());
   // per point pair: f = k n̂ (n̂·u), u = J x the change of Δ = y_j(t_b) − y_i(t_a); K x puts
-  // B_b f on j's control points and −B_a f on i's
+  // B_b f on j's control points and −B_a f on i's. Here the scalar k n̂·u
   tbb::parallel_for(tbb::blocked_range<int>(0, rows, 16), [&](const tbb::blocked_range<int>& r) {
     for (int i = r.begin(); i < r.end(); ++i) {
-      const std::vector<StiffPair>& pairs = m_row_stiff[i];
-      std::vector<Eigen::Vector3d>& out = m_row_product[i];
-      out.resize(pairs.size());
       const double* xi = x.data() + 3 * model.seg_cp[i];
-      for (size_t k = 0; k < pairs.size(); ++k) {
-        const StiffPair& p = pairs[k];
+      for (int k = m_stiff_offset[i]; k < m_stiff_offset[i + 1]; ++k) {
+        const StiffPair& p = m_stiff_pairs[k];
         const double* xj = x.data() + 3 * model.seg_cp[p.j];
         const std::array<double, 4>& ba = m_basis[p.a];
         const std::array<double, 4>& bb = m_basis[p.b];
         double u[3] = {0, 0, 0};
         for (int c = 0; c < 4; ++c)
           for (int d = 0; d < 3; ++d) u[d] += bb[c] * xj[3 * c + d] - ba[c] * xi[3 * c + d];
-        const double s = p.k * (p.nx * u[0] + p.ny * u[1] + p.nz * u[2]);
-        out[k] = Eigen::Vector3d(s * p.nx, s * p.ny, s * p.nz);
+        m_stiff_product[k] = p.k * (p.nx * u[0] + p.ny * u[1] + p.nz * u[2]);
       }
     }
   });
-  // per segment, in a fixed order: its own rows' pairs (it is i), then the pairs of rows
-  // k < s that have it as j (each row's pairs are in ascending j)
+  // per segment, in a fixed order: its own row's pairs (it is i), then the pairs of rows
+  // k < s that have it as j, in ascending k
   m_product_accumulator.run(model, [&](int s, Vector12d& slot) {
     if (s >= rows) return 0.0;
-    const std::vector<StiffPair>& own = m_row_stiff[s];
-    for (size_t k = 0; k < own.size(); ++k) {
-      const std::array<double, 4>& ba = m_basis[own[k].a];
-      for (int c = 0; c < 4; ++c) slot.segment<3>(3 * c) -= ba[c] * m_row_product[s][k];
+    auto force = [&](int k) {
+      const StiffPair& p = m_stiff_pairs[k];
+      const double f = m_stiff_product[k];
+      return Eigen::Vector3d(f * p.nx, f * p.ny, f * p.nz);
+    };
+    for (int k = m_stiff_offset[s]; k < m_stiff_offset[s + 1]; ++k) {
+      const Eigen::Vector3d f = force(k);
+      const std::array<double, 4>& ba = m_basis[m_stiff_pairs[k].a];
+      for (int c = 0; c < 4; ++c) slot.segment<3>(3 * c) -= ba[c] * f;
     }
-    for (int k : m_partners[s]) {
-      if (k >= s) break;
-      const std::vector<StiffPair>& row = m_row_stiff[k];
-      auto it = std::lower_bound(row.begin(), row.end(), s,
-                                 [](const StiffPair& p, int j) { return p.j < j; });
-      for (; it != row.end() && it->j == s; ++it) {
-        const std::array<double, 4>& bb = m_basis[it->b];
-        const Eigen::Vector3d& f = m_row_product[k][it - row.begin()];
-        for (int c = 0; c < 4; ++c) slot.segment<3>(3 * c) += bb[c] * f;
-      }
+    for (int q = m_stiff_in_offset[s]; q < m_stiff_in_offset[s + 1]; ++q) {
+      const int k = m_stiff_in[q];
+      const Eigen::Vector3d f = force(k);
+      const std::array<double, 4>& bb = m_basis[m_stiff_pairs[k].b];
+      for (int c = 0; c < 4; ++c) slot.segment<3>(3 * c) += bb[c] * f;
     }
     return 0.0;
   });
   m_product_accumulator.gather(model, y, 1.0);
 }
 
-void ContactTerm::add_operator_segment_stiffness(const Model& model,
+void ContactTerm::add_operator_segment_stiffness(const Model& /*model*/,
                                                  std::vector<Matrix12d>& blocks) const {
   if (!m_stiffness) return;
-  const int rows = std::min<int>(m_num_seg, static_cast<int>(m_row_stiff.size()));
+  const int rows = std::min<int>(m_num_seg, static_cast<int>(m_stiff_offset.size()) - 1);
+  if (rows <= 0) return;  // no evaluation yet
   // k (B Bᵀ) ⊗ n̂n̂ᵀ, its upper triangle of 3×3 blocks, then mirrored
   auto add = [](Matrix12d& block, const std::array<double, 4>& b, const StiffPair& p) {
     const double n[3] = {p.nx, p.ny, p.nz};
@@ -539,19 +566,15 @@ void ContactTerm::add_operator_segment_stiffness(const Model& model,
           for (int c = 0; c < 3; ++c) block(3 * u + r, 3 * v + c) += w * nn[r][c];
       }
   };
-  // each segment's block from its own rows (it is i) and from the rows k < s that have it
+  // each segment's block from its own row (it is i) and from the rows k < s that have it
   // as j: in parallel, each block written by one task
   tbb::parallel_for(tbb::blocked_range<int>(0, rows, 16), [&](const tbb::blocked_range<int>& r) {
     for (int s = r.begin(); s < r.end(); ++s) {
       Matrix12d block = Matrix12d::Zero();
-      for (const StiffPair& p : m_row_stiff[s]) add(block, m_basis[p.a], p);
-      for (int k : m_partners[s]) {
-        if (k >= s) break;
-        const std::vector<StiffPair>& row = m_row_stiff[k];
-        auto it = std::lower_bound(row.begin(), row.end(), s,
-                                   [](const StiffPair& p, int j) { return p.j < j; });
-        for (; it != row.end() && it->j == s; ++it) add(block, m_basis[it->b], *it);
-      }
+      for (int k = m_stiff_offset[s]; k < m_stiff_offset[s + 1]; ++k)
+        add(block, m_basis[m_stiff_pairs[k].a], m_stiff_pairs[k]);
+      for (int q = m_stiff_in_offset[s]; q < m_stiff_in_offset[s + 1]; ++q)
+        add(block, m_basis[m_stiff_pairs[m_stiff_in[q]].b], m_stiff_pairs[m_stiff_in[q]]);
       for (int u = 0; u < 4; ++u)
         for (int v = 0; v < u; ++v)
           block.block<3, 3>(3 * u, 3 * v) = block.block<3, 3>(3 * v, 3 * u).transpose();

@@ -171,6 +171,8 @@ class ContactTerm : public Term {
   };
 
   void resize(const Model& model);
+  // m_incoming from the kernels' pairs (rows 0 … n − 1)
+  void index_incoming_pairs(int n);
   void tabulate_points(const Model& model, const Eigen::VectorXd& q, const Eigen::VectorXd& v);
   template <bool DAMP>
   void pair_kernel(const Model& model, int i, int j, RowStats& row);
@@ -206,11 +208,24 @@ class ContactTerm : public Term {
   std::vector<Aabb> m_list_boxes;
   std::vector<long long> m_list_box_tests;
   std::vector<std::vector<PairForce>> m_pairs;  // per segment i: pairs (i, j > i) in contact
+  // per segment s: the pairs (k < s, s) in contact, m_pairs[k][index], in ascending k (built
+  // after the kernels, so that the gather visits only pairs in contact rather than search
+  // every candidate)
+  struct Incoming {
+    int k = 0, index = 0;
+  };
+  std::vector<std::vector<Incoming>> m_incoming;
+  // with m_stiffness, the rows' point pairs in one array (row i's at [m_stiff_offset[i],
+  // m_stiff_offset[i + 1])), and per segment s the indices of those that have it as j, in
+  // ascending order (rows k < s in ascending k) at [m_stiff_in_offset[s], …[s + 1]): the
+  // operator's products visit them in this fixed order, from contiguous memory
+  std::vector<StiffPair> m_stiff_pairs;
+  std::vector<int> m_stiff_offset, m_stiff_in_offset, m_stiff_in, m_stiff_fill;
+  mutable std::vector<double> m_stiff_product;  // per point pair: k n̂·(J x) (dyn)
   std::vector<RowStats> m_rows;
   std::vector<std::vector<ContactPointPair>> m_row_records;
   std::vector<std::vector<StiffPair>> m_row_stiff;  // per row i, with m_stiffness
-  // add_stiffness_product: per stiff pair k n̂ (n̂·J x), and the per-segment sums
-  mutable std::vector<std::vector<Eigen::Vector3d>> m_row_product;
+  // add_stiffness_product: the per-segment sums
   mutable SegmentAccumulator m_product_accumulator;
   std::vector<ContactPointPair> m_point_pairs;
   mutable std::vector<long long> m_record_offset;  // record(): first pair of each row
