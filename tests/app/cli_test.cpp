@@ -362,74 +362,49 @@ TEST(Cli, ResumeTakesTheKnitFromTheStateFile) {
   EXPECT_EQ(nlohmann::json::parse(in)["rows"], 3);
 }
 
-// --bind-off: the state file says the knit is bound off and holds its ties (two per loop
-// of the last row); --resume keeps them unless told otherwise, and --bind-off on a state
-// knitted without is refused
-TEST(Cli, BindOffIsKeptInTheStateFileAndOnResume) {
-  const std::string dir = temp_dir("cli_bind_off");
-  const std::string opts = " --quiet --no-frames --threads 1 --max-time 0.002";
-  ASSERT_EQ(
-      run("relax stockinette --rows 3 --cols 4 --bind-off" + opts + " --out " + dir + "/first")
-          .code,
-      0);
-  const std::string first = dir + "/first/relaxed.kstate";
-  const knit::StateFile f = knit::read_state_file(first);
-  ASSERT_TRUE(f.knit.has_value());
-  EXPECT_TRUE(f.knit->bind_off);
-  EXPECT_EQ(f.glues.size(), 2u + 2 * 4);
-  std::ifstream in(dir + "/first/summary.json");
-  EXPECT_EQ(nlohmann::json::parse(in)["bind_off"], true);
-  const Result alone = run("relax --resume " + first + opts + " --out " + dir + "/alone");
-  ASSERT_EQ(alone.code, 0) << alone.output;
-  const knit::StateFile a = knit::read_state_file(dir + "/alone/relaxed.kstate");
-  ASSERT_TRUE(a.knit.has_value());
-  EXPECT_TRUE(a.knit->bind_off);
-  EXPECT_EQ(a.glues.size(), f.glues.size());
-  ASSERT_EQ(run("relax stockinette --rows 3 --cols 4" + opts + " --out " + dir + "/live").code, 0);
-  const Result bound = run("relax stockinette --rows 3 --cols 4 --bind-off --resume " + dir +
-                           "/live/relaxed.kstate" + opts + " --out " + dir + "/bound");
-  EXPECT_EQ(bound.code, 1);
-  EXPECT_NE(bound.output.find("without a bind-off; give no --bind-off"), std::string::npos)
-      << bound.output;
-  EXPECT_FALSE(fs::exists(dir + "/bound"));
-  const Result stretch = run("stretch --from " + first + " --bind-off --out " + dir + "/s");
-  EXPECT_EQ(stretch.code, 1);
-  EXPECT_NE(stretch.output.find("--bind-off"), std::string::npos) << stretch.output;
-  EXPECT_FALSE(fs::exists(dir + "/s"));
-}
-
-// --cast-on as --bind-off: in the state file (with its ties, two per loop of the second
-// row), kept on --resume, a mismatch refused, and refused on a state --from
-TEST(Cli, CastOnIsKeptInTheStateFileAndOnResume) {
-  const std::string dir = temp_dir("cli_cast_on");
-  const std::string opts = " --quiet --no-frames --threads 1 --max-time 0.002";
-  ASSERT_EQ(
-      run("relax garter --rows 3 --cols 4 --cast-on" + opts + " --out " + dir + "/first").code, 0);
-  const std::string first = dir + "/first/relaxed.kstate";
-  const knit::StateFile f = knit::read_state_file(first);
-  ASSERT_TRUE(f.knit.has_value());
-  EXPECT_TRUE(f.knit->cast_on);
-  EXPECT_FALSE(f.knit->bind_off);
-  EXPECT_EQ(f.glues.size(), 2u + 2 * 4);
-  std::ifstream in(dir + "/first/summary.json");
-  EXPECT_EQ(nlohmann::json::parse(in)["cast_on"], true);
-  const Result alone = run("relax --resume " + first + opts + " --out " + dir + "/alone");
-  ASSERT_EQ(alone.code, 0) << alone.output;
-  const knit::StateFile a = knit::read_state_file(dir + "/alone/relaxed.kstate");
-  ASSERT_TRUE(a.knit.has_value());
-  EXPECT_TRUE(a.knit->cast_on);
-  EXPECT_EQ(a.glues.size(), f.glues.size());
-  ASSERT_EQ(run("relax garter --rows 3 --cols 4" + opts + " --out " + dir + "/live").code, 0);
-  const Result cast = run("relax garter --rows 3 --cols 4 --cast-on --resume " + dir +
-                          "/live/relaxed.kstate" + opts + " --out " + dir + "/cast");
-  EXPECT_EQ(cast.code, 1);
-  EXPECT_NE(cast.output.find("without a cast-on; give no --cast-on"), std::string::npos)
-      << cast.output;
-  EXPECT_FALSE(fs::exists(dir + "/cast"));
-  const Result stretch = run("stretch --from " + first + " --cast-on --out " + dir + "/s");
-  EXPECT_EQ(stretch.code, 1);
-  EXPECT_NE(stretch.output.find("--cast-on"), std::string::npos) << stretch.output;
-  EXPECT_FALSE(fs::exists(dir + "/s"));
+// --bind-off and --cast-on: the state file says the knit is bound off (cast on) and holds
+// its ties (two per loop of the last row, or of the second); --resume keeps them unless
+// told otherwise, the flag on a state knitted without is refused, and so is the flag on a
+// state --from in stretch
+TEST(Cli, EdgeTiesAreKeptInTheStateFileAndOnResume) {
+  for (const std::string flag : {"bind-off", "cast-on"}) {
+    SCOPED_TRACE(flag);
+    const std::string key = flag == "bind-off" ? "bind_off" : "cast_on";
+    const std::string dir = temp_dir("cli_" + key);
+    const std::string opts = " --quiet --no-frames --threads 1 --max-time 0.002";
+    ASSERT_EQ(
+        run("relax stockinette --rows 3 --cols 4 --" + flag + opts + " --out " + dir + "/first")
+            .code,
+        0);
+    const std::string first = dir + "/first/relaxed.kstate";
+    const knit::StateFile f = knit::read_state_file(first);
+    ASSERT_TRUE(f.knit.has_value());
+    EXPECT_EQ(f.knit->bind_off, flag == "bind-off");
+    EXPECT_EQ(f.knit->cast_on, flag == "cast-on");
+    EXPECT_EQ(f.glues.size(), 2u + 2 * 4);
+    std::ifstream in(dir + "/first/summary.json");
+    EXPECT_EQ(nlohmann::json::parse(in)[key], true);
+    const Result alone = run("relax --resume " + first + opts + " --out " + dir + "/alone");
+    ASSERT_EQ(alone.code, 0) << alone.output;
+    const knit::StateFile a = knit::read_state_file(dir + "/alone/relaxed.kstate");
+    ASSERT_TRUE(a.knit.has_value());
+    EXPECT_EQ(a.knit->bind_off, f.knit->bind_off);
+    EXPECT_EQ(a.knit->cast_on, f.knit->cast_on);
+    EXPECT_EQ(a.glues.size(), f.glues.size());
+    ASSERT_EQ(run("relax stockinette --rows 3 --cols 4" + opts + " --out " + dir + "/live").code,
+              0);
+    const Result tied = run("relax stockinette --rows 3 --cols 4 --" + flag + " --resume " + dir +
+                            "/live/relaxed.kstate" + opts + " --out " + dir + "/tied");
+    EXPECT_EQ(tied.code, 1);
+    const std::string noun = flag == "bind-off" ? "a bind-off" : "a cast-on";
+    EXPECT_NE(tied.output.find("without " + noun + "; give no --" + flag), std::string::npos)
+        << tied.output;
+    EXPECT_FALSE(fs::exists(dir + "/tied"));
+    const Result stretch = run("stretch --from " + first + " --" + flag + " --out " + dir + "/s");
+    EXPECT_EQ(stretch.code, 1);
+    EXPECT_NE(stretch.output.find("--" + flag), std::string::npos) << stretch.output;
+    EXPECT_FALSE(fs::exists(dir + "/s"));
+  }
 }
 
 }  // namespace
