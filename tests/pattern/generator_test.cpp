@@ -183,6 +183,9 @@ TEST(Generator, BindOffAndCastOnTieEachEdgeLoopWhereTheLegsCrossTheHeadBelow) {
   ASSERT_EQ(g.glues.size(), 2u + 4 * both.cols);
   EXPECT_EQ(g.stitch[g.glues[2].a.segment].row, both.rows - 1);
   EXPECT_EQ(g.stitch[g.glues[2 + 2 * both.cols].a.segment].row, 1);
+  // with 2 rows the bind-off's ties are the cast-on's: tied once
+  both.rows = 2;
+  EXPECT_EQ(generate_knit(builtin_pattern("stockinette"), both).glues.size(), 2u + 2 * both.cols);
   KnitOptions one_row;
   one_row.rows = 1;
   one_row.bind_off = true;

@@ -420,14 +420,15 @@ Eigen::Vector3d yarn_point(const Eigen::Matrix3Xd& cp, const YarnPoint& p) {
   return cp.middleCols<4>(p.segment) * bspline_basis(p.t);
 }
 
-// The bind-off's two ties of the loop of `top` (a stitch of the last row) to the loop of
-// `below` (the stitch under it): where its legs cross that loop's head, the upper part of
-// the loop below (above LEG_CROSSING_HEIGHT of its height), each tie at the closest pair
-// of yarn points there. The two legs are told apart by their place along the yarn: the
-// second tie is the closest pair at least a quarter of the loop away from the first.
-std::vector<Glue> bind_off_ties(const Eigen::Matrix3Xd& cp, const std::vector<StitchCoord>& stitch,
-                                const std::vector<YarnPiece>& piece, StitchCoord top,
-                                StitchCoord below) {
+// The two ties of the loop of `top` to the loop of `below` (the stitch under it), for the
+// bind-off (`top` in the last row) and the cast-on (`top` in the second row): where its
+// legs cross that loop's head, the upper part of the loop below (above
+// LEG_CROSSING_HEIGHT of its height), each tie at the closest pair of yarn points there. The two
+// legs are told apart by their place along the yarn: the second tie is the closest pair at least a
+// quarter of the loop away from the first.
+std::vector<Glue> edge_ties(const Eigen::Matrix3Xd& cp, const std::vector<StitchCoord>& stitch,
+                            const std::vector<YarnPiece>& piece, StitchCoord top,
+                            StitchCoord below) {
   constexpr int n = 16;                        // samples per segment
   constexpr double LEG_CROSSING_HEIGHT = 0.8;  // of the loop below, from its bottom
   struct Sample {
@@ -603,15 +604,14 @@ GeneratedKnit generate_knit(const Pattern& pattern_in, const KnitOptions& opt) {
   out.glues.push_back({YarnPoint{nseg - 1, 1.0}, to_end});
   if (opt.bind_off)
     for (int col = 0; col < opt.cols; ++col)
-      for (const Glue& g : bind_off_ties(out.control_points, out.stitch, out.piece,
-                                         {opt.rows - 1, col}, {opt.rows - 2, col}))
+      for (const Glue& g : edge_ties(out.control_points, out.stitch, out.piece, {opt.rows - 1, col},
+                                     {opt.rows - 2, col}))
         out.glues.push_back(g);
   // the cast-on: the same ties one row up from the bottom edge (the first row's heads are
-  // where the second row's legs cross them; with 2 rows and a bind-off, those ties twice)
-  if (opt.cast_on)
+  // where the second row's legs cross them); with 2 rows a bind-off has tied them already
+  if (opt.cast_on && !(opt.bind_off && opt.rows == 2))
     for (int col = 0; col < opt.cols; ++col)
-      for (const Glue& g :
-           bind_off_ties(out.control_points, out.stitch, out.piece, {1, col}, {0, col}))
+      for (const Glue& g : edge_ties(out.control_points, out.stitch, out.piece, {1, col}, {0, col}))
         out.glues.push_back(g);
   for (const Glue& g : out.glues)
     out.glue_gap_cm.push_back(

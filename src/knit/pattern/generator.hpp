@@ -42,7 +42,8 @@ struct KnitOptions {
   /// Secure the first row as a cast-on does: each loop of the second row is tied (glued)
   /// where its two legs cross the head of the first row's loop below it, so that a pull
   /// cannot draw the first row's yarn out of the fabric (the first row has no loops below
-  /// to hold it). Needs at least 2 rows. Off by default.
+  /// to hold it). Needs at least 2 rows. Off by default. With 2 rows and bind_off, the
+  /// bind-off's ties already are these.
   bool cast_on = false;
 };
 
