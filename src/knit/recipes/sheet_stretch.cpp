@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -102,7 +101,7 @@ double sheet_stiffness(const KnitSheet& ks, const StretchGeometry& g, const shee
   // a fit solves the sheet many times before anything is written: stop at a signal
   if (const int sig = interrupt_signal(); sig != 0)
     throw std::runtime_error(std::string("sheet fit: interrupted by ") +
-                             (sig == SIGINT ? "SIGINT" : "SIGTERM") + ": nothing was written");
+                             interrupt_signal_name(sig) + ": nothing was written");
   sheet::SheetState state = sheet::rest_state(ks.mesh);
   const StaticSample s = solve_at(ks, g, m, strain, state);
   if (!s.converged)
@@ -319,8 +318,8 @@ StretchResult stretch_sheet(const std::string& kstate_path, const SheetStretchOp
                          : failed == 0 ? StepStatus::OK
                                        : StepStatus::NOT_CONVERGED;
   result.report.message =
-      signal != 0 ? std::string("interrupted by ") + (signal == SIGINT ? "SIGINT" : "SIGTERM") +
-                        " at strain " + short_number(result.curve.back().strain) + " (run it again)"
+      signal != 0 ? std::string("interrupted by ") + interrupt_signal_name(signal) + " at strain " +
+                        short_number(result.curve.back().strain) + " (run it again)"
       : failed == 0 ? ""
                     : std::to_string(failed) + " samples did not reach equilibrium";
   if (signal != 0) summary["message"] = result.report.message;

@@ -36,6 +36,10 @@ InterruptHandler::~InterruptHandler() {
   sigaction(SIGTERM, &g_old_term, nullptr);
 }
 
+const char* interrupt_signal_name(int signal) {
+  return signal == SIGINT ? "SIGINT" : "SIGTERM";
+}
+
 int interrupt_signal() {
   return g_signal;
 }

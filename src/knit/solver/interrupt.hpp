@@ -15,6 +15,8 @@ class InterruptHandler {
 
 /// The signal received since the last clear (SIGINT, SIGTERM), or 0.
 int interrupt_signal();
+/// "SIGINT" or "SIGTERM", for messages about a received signal.
+const char* interrupt_signal_name(int signal);
 /// Forgets a received signal.
 void clear_interrupt();
 /// Acts as if `signal` had been received once (tests, and callers that stop a run from

@@ -9,7 +9,6 @@
 
 #include <chrono>
 #include <cmath>
-#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -433,7 +432,7 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
     }
     if (signal != 0) {
       report.status = StepStatus::INTERRUPTED;
-      report.message = std::string("interrupted by ") + (signal == SIGINT ? "SIGINT" : "SIGTERM") +
+      report.message = std::string("interrupted by ") + interrupt_signal_name(signal) +
                        " at t = " + short_number(state.time) + " s";
       break;
     }
