@@ -7,6 +7,7 @@
 // first relaxed with the relax recipe's defaults.
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -240,8 +241,16 @@ void register_stretch(CLI::App& app) {
       end_if_interrupted(result.report);
     }
     const auto& m = result.report.summary["stretch"];
-    std::cout << "stretched " << o->direction << " to strain " << o->stretch.to_strain
-              << ": initial clamp separation " << result.initial_separation << " cm, max force "
+    // a pull that stopped (unstable) says where
+    double reached = 0;
+    for (const auto& s : result.curve) reached = std::max(reached, s.strain);
+    if (result.report.status == knit::StepStatus::OK || result.curve.empty())
+      std::cout << "stretched " << o->direction << " to strain " << o->stretch.to_strain;
+    else
+      std::cout << "stopped at strain " << reached << " of " << o->stretch.to_strain << " ("
+                << result.report.summary.value("status", std::string("failed")) << "), pulled "
+                << o->direction;
+    std::cout << ": initial clamp separation " << result.initial_separation << " cm, max force "
               << m["max_force_dyn"] << " dyn, stiffness " << m["stiffness_small_strain"] << " → "
               << m["stiffness_end"] << " dyn per unit strain; stretch.csv in " << o->out << "/\n";
     if (result.report.status != knit::StepStatus::OK) throw RunFailed();

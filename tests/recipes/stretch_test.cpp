@@ -163,6 +163,39 @@ TEST(Stretch, APullKnownToMisleadSaysSoInItsSummary) {
   EXPECT_EQ(r.report.summary["caveats"][0], stretch_caveats(o)[0]);
 }
 
+// A pull that becomes unstable (here a step of 3e-4 s, beyond the explicit step's limit,
+// and a fast pull) stops with its outputs up to the last strain it reached, renders
+// included: the strains it passed and the last one, which the summary names.
+TEST(Stretch, AnUnstablePullIsRenderedUpToWhereItStopped) {
+  StretchOptions o;
+  o.to_strain = 0.3;
+  o.speed = 50;
+  o.progress = false;
+  o.params.solver.time_step = 3e-4;
+  o.out_dir = (fs::path(::testing::TempDir()) / "stretch_unstable").string();
+  o.overwrite = true;
+  o.render_width = 64;
+  o.render_height = 48;
+  const StretchResult r = stretch_knit(relaxed_sample(), o);
+  ASSERT_EQ(r.report.summary["status"], "unstable") << r.report.summary.dump(2);
+  ASSERT_GE(r.curve.size(), 2u);
+  const double reached = r.curve.back().strain;
+  EXPECT_GT(reached, 0.0);
+  EXPECT_LT(reached, 0.3);
+  std::ifstream in(o.out_dir + "/summary.json");
+  const auto s = nlohmann::json::parse(in);
+  ASSERT_TRUE(s.contains("renders")) << s.dump(2);
+  EXPECT_NEAR(s["renders"]["stopped_at_strain"].get<double>(), reached, 1e-12);
+  // strain 0 and the last one reached (below 0.25 here), and nothing beyond it
+  EXPECT_EQ(s["renders"]["images"].size(), 2u) << s["renders"].dump();
+  for (const auto& [strain, png] : s["renders"]["images"].items()) {
+    EXPECT_LE(std::stod(strain), reached * (1 + 1e-2)) << strain;  // named to 3 digits
+    EXPECT_TRUE(fs::exists(o.out_dir + "/" + png.get<std::string>())) << png;
+  }
+  EXPECT_TRUE(fs::exists(o.out_dir + "/stretch_renders.png"));
+  EXPECT_TRUE(fs::exists(o.out_dir + "/last_good.kstate"));
+}
+
 // --from a relative path is read from the working directory (not from beside itself)
 TEST(Stretch, ARelativePathIsReadFromTheWorkingDirectory) {
   const fs::path sample = relaxed_sample(), cwd = fs::current_path();

@@ -254,7 +254,8 @@ std::string strain_label(double e) {
 }
 
 // renders of the frames nearest each shown strain (first pull only), side by side, and a
-// movie of every frame; returns the summary's "renders" entry
+// movie of every frame; returns the summary's "renders" entry. A pull that stopped before
+// `to` shows the strains it passed and the last one it reached.
 nlohmann::json render_stretch(const std::string& out_dir, const std::vector<StretchSample>& curve,
                               double to, const StretchOptions& o) {
   const fs::path dir(out_dir);
@@ -278,6 +279,10 @@ nlohmann::json render_stretch(const std::string& out_dir, const std::vector<Stre
       end = i + 1;
       break;
     }
+  double reached = 0;
+  for (size_t i = 0; i < end; ++i) reached = std::max(reached, curve[i].strain);
+  const bool stopped = reached < to * (1 - 1e-9);
+  if (stopped) to = reached;
   fs::create_directories(dir / "renders");
   std::vector<Image> panels;
   std::vector<std::string> labels;
@@ -305,10 +310,12 @@ nlohmann::json render_stretch(const std::string& out_dir, const std::vector<Stre
   ro.spp = ro.shadow_rays = ro.ao_rays = 2;
   // at the pull's real time, each frame with its time
   const SequenceResult movie = render_sequence(frames, ro, (dir / "movie").string());
-  return {{"images", shown},
-          {"side_by_side", "stretch_renders.png"},
-          {"movie",
-           movie.movie.empty() ? nlohmann::json(nullptr) : nlohmann::json("movie/animation.mp4")}};
+  nlohmann::json renders = {{"images", shown},
+                            {"side_by_side", "stretch_renders.png"},
+                            {"movie", movie.movie.empty() ? nlohmann::json(nullptr)
+                                                          : nlohmann::json("movie/animation.mp4")}};
+  if (stopped) renders["stopped_at_strain"] = reached;
+  return renders;
 }
 
 }  // namespace
@@ -400,7 +407,7 @@ double StretchGeometry::width(const Eigen::VectorXd& q, double moved) const {
 }
 
 void write_stretch_outputs(const StretchOptions& o, const std::vector<StretchSample>& curve,
-                           const std::string& label, bool finished) {
+                           const std::string& label, bool ended) {
   const fs::path dir(o.out_dir);
   write_stretch_csv(curve, (dir / "stretch.csv").string());
   if (!find_gnuplot().empty()) {
@@ -422,7 +429,7 @@ void write_stretch_outputs(const StretchOptions& o, const std::vector<StretchSam
     plot_series({width}, "nominal strain", "width across the pull at the middle (cm)",
                 "Width: " + label, (dir / "stretch_width.png").string());
   }
-  if (o.render && o.write_frames && finished) {
+  if (o.render && o.write_frames && ended) {
     const nlohmann::json renders = render_stretch(o.out_dir, curve, o.to_strain, o);
     // the summary was written by the run: add where the pictures are
     const fs::path summary_path = dir / "summary.json";
@@ -700,7 +707,7 @@ StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions&
 
   if (!o.out_dir.empty())
     write_stretch_outputs(o, result.curve, stretch_label(g.file, o.direction),
-                          result.report.status == StepStatus::OK);
+                          result.report.status != StepStatus::INTERRUPTED);
   return result;
 }
 

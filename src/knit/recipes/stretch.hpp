@@ -140,10 +140,12 @@ StretchGeometry stretch_geometry(const std::string& kstate_path, const StretchOp
 std::string stretch_label(const StateFile& file, StretchDirection direction);
 
 /// After a run that wrote its summary (and frames) into options.out_dir: stretch.csv, the
-/// force and width plots titled with `label`, and, when `finished` and options.render, the
-/// renders and movie (listed in the summary's "renders").
+/// force and width plots titled with `label`, and, when `ended` and options.render, the
+/// renders and movie (listed in the summary's "renders"). A pull has ended when it reached
+/// its strain or stopped for good (unstable): then it is rendered up to the last strain
+/// it reached; an interrupted one goes on with --resume and is rendered when it ends.
 void write_stretch_outputs(const StretchOptions& options, const std::vector<StretchSample>& curve,
-                           const std::string& label, bool finished);
+                           const std::string& label, bool ended);
 
 /// Stretches the relaxed knit in `kstate_path` (written by `knitsim relax`). With out_dir,
 /// writes the run (frames, log.csv, final.kstate) and stretch.csv, a summary.json with
