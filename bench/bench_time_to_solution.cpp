@@ -10,6 +10,8 @@
 // of the yarn's tube with an object over all its steps. Runs that go unstable say when.
 //   bench_time_to_solution [--scene S] [--knit K] [--time T]
 //                          [--runs explicit:2e-4,imex:4e-4,...] [--reference explicit:H]
+// A run named INTEGRATOR+bending:H takes the bending energy implicitly too
+// (SolverSettings::implicit_bending), e.g. imex-contact+bending:4e-3.
 //                          [--threads N] [--end-mass-floor F]
 // --end-mass-floor: each yarn end's two control points get at least F of an interior one's
 // mass (the scene key end_mass_floor): the large steps of imex-contact otherwise fail first
@@ -28,13 +30,19 @@ struct Spec {
   knit::Integrator integrator;
   double h;
   std::string text;
+  bool implicit_bending = false;
 };
 
 Spec parse_spec(const std::string& text) {
   const size_t colon = text.find(':');
   if (colon == std::string::npos)
-    throw std::invalid_argument("'" + text + "': expected INTEGRATOR:H (e.g. imex:4e-4)");
-  return {knit::parse_integrator(text.substr(0, colon)), std::stod(text.substr(colon + 1)), text};
+    throw std::invalid_argument("'" + text + "': expected INTEGRATOR[+bending]:H (e.g. imex:4e-4)");
+  std::string name = text.substr(0, colon);
+  const std::string suffix = "+bending";
+  const bool bending = name.size() > suffix.size() &&
+                       name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0;
+  if (bending) name.resize(name.size() - suffix.size());
+  return {knit::parse_integrator(name), std::stod(text.substr(colon + 1)), text, bending};
 }
 
 struct Outcome {
@@ -64,6 +72,7 @@ Outcome run(const knit::Scene& base, const Spec& spec, double duration) {
   knit::Scene scene = base;
   scene.model.params.solver.time_step = spec.h;
   scene.model.params.solver.integrator = spec.integrator;
+  scene.model.params.solver.implicit_bending = spec.implicit_bending;
   auto sim = knit::make_scene_simulator(scene);
   Outcome o;
   o.state = scene.state;
@@ -137,6 +146,7 @@ int main(int argc, char** argv) {
       reference_rate = o.wall_s / duration;
     }
     nlohmann::json j = {{"integrator", knit::integrator_name(spec.integrator)},
+                        {"implicit_bending", spec.implicit_bending},
                         {"h", spec.h},
                         {"reference", k == 0},
                         {"stable", o.stable},

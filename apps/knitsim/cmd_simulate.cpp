@@ -16,7 +16,7 @@ void register_simulate(CLI::App& app) {
     std::string scene, out, resume, knit;
     int threads = 0;
     double duration = 0;
-    bool quiet = false, overwrite = false;
+    bool quiet = false, overwrite = false, implicit_bending = false;
     std::string export_format, integrator;
     double time_step = 0;
     int output_every = 0;
@@ -41,6 +41,7 @@ void register_simulate(CLI::App& app) {
   cmd->add_option("--time-step", opts->time_step, "override the scene's time step (s)")
       ->check(finite_range(knit::param_range("time_step").min, knit::param_range("time_step").max));
   add_integrator_option(cmd, opts->integrator);
+  add_implicit_bending_option(cmd, opts->implicit_bending);
   cmd->add_option("--output-every", opts->output_every,
                   "override the scene's steps between written states and log rows")
       ->check(CLI::Range(1, 1'000'000'000));
@@ -53,6 +54,7 @@ void register_simulate(CLI::App& app) {
     if (cmd->count("--time-step")) scene.model.params.solver.time_step = opts->time_step;
     if (cmd->count("--integrator"))
       scene.model.params.solver.integrator = knit::parse_integrator(opts->integrator);
+    if (opts->implicit_bending) scene.model.params.solver.implicit_bending = true;
     if (cmd->count("--output-every")) scene.output_every = opts->output_every;
     if (cmd->count("--duration")) {
       knit::check_duration(opts->duration, scene.model.params.solver.time_step);

@@ -30,7 +30,7 @@ void register_stretch(CLI::App& app) {
     double time_step = 0;
     knit::StretchOptions stretch;
     knit::SheetStretchOptions sheet;
-    bool use_sheet = false;
+    bool use_sheet = false, implicit_bending = false;
     std::vector<std::string> fit;
     knit::RelaxKnitOptions relax;
     double relax_time = 1.0;
@@ -70,6 +70,7 @@ void register_stretch(CLI::App& app) {
   cmd->add_option("--time-step", o->time_step, "time step of the yarn model (s)")
       ->check(finite_range(knit::param_range("time_step").min, knit::param_range("time_step").max));
   add_integrator_option(cmd, o->integrator);
+  add_implicit_bending_option(cmd, o->implicit_bending);
   cmd->add_option("--clamp-stitches", o->stretch.clamp_stitches,
                   "columns, rows or corner stitches held by each clamp");
   cmd->add_flag("--sheet", o->use_sheet,
@@ -165,14 +166,16 @@ void register_stretch(CLI::App& app) {
     if (cmd->count("--time-step")) o->stretch.params.solver.time_step = o->time_step;
     if (cmd->count("--integrator"))
       o->stretch.params.solver.integrator = knit::parse_integrator(o->integrator);
-    if (o->use_sheet &&
-        (cmd->count("--hold") + cmd->count("--hold-time") + cmd->count("--hold-damped") +
-             cmd->count("--time-step") + cmd->count("--integrator") +
-             cmd->count("--yarn-friction") + cmd->count("--end-mass-floor") >
-         0))
+    o->stretch.params.solver.implicit_bending = o->implicit_bending;
+    if (o->use_sheet && (cmd->count("--hold") + cmd->count("--hold-time") +
+                             cmd->count("--hold-damped") + cmd->count("--time-step") +
+                             cmd->count("--integrator") + cmd->count("--implicit-bending") +
+                             cmd->count("--yarn-friction") + cmd->count("--end-mass-floor") >
+                         0))
       throw std::invalid_argument(
           "stretch --sheet: the sheet is pulled through equilibria already; --hold, "
-          "--hold-time, --hold-damped, --time-step, --integrator, --yarn-friction and "
+          "--hold-time, --hold-damped, --time-step, --integrator, --implicit-bending, "
+          "--yarn-friction and "
           "--end-mass-floor are for the yarn model");
     if ((cmd->count("--hold-time") || o->stretch.hold_damped) && !cmd->count("--hold"))
       throw std::invalid_argument("stretch: --hold-time and --hold-damped need --hold");

@@ -101,6 +101,13 @@ void add_integrator_option(CLI::App* cmd, std::string& integrator) {
       ->check(CLI::IsMember(knit::integrator_names()));
 }
 
+void add_implicit_bending_option(CLI::App* cmd, bool& implicit_bending) {
+  cmd->add_flag("--implicit-bending", implicit_bending,
+                "with --integrator imex or imex-contact: the bending energy implicit too (its "
+                "stiffness in the solve), which lifts the time-step limit bending sets "
+                "(docs/model.md §5.2)");
+}
+
 void add_export_option(CLI::App* cmd, std::string& format) {
   cmd->add_option(
          "--export", format,

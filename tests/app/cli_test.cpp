@@ -53,17 +53,18 @@ TEST(Cli, PendulumExampleRunsAndSummarises) {
   EXPECT_TRUE(fs::exists(out + "/frames/state_000005.kstate"));
 }
 
-// --integrator and --time-step override the scene's: the summary records what ran, and an
-// integrator that does not exist is refused by name.
+// --integrator, --implicit-bending and --time-step override the scene's: the summary
+// records what ran, and an integrator that does not exist is refused by name.
 TEST(Cli, SimulateTakesTheIntegratorTimeStepAndOutputIntervalAsked) {
   const std::string out = temp_dir("cli_imex");
   const Result r = run(std::string("simulate ") + KNIT_EXAMPLES + "/pendulum.json --out " + out +
-                       " --duration 0.05 --time-step 2e-4 --integrator imex --output-every 60 "
-                       "--quiet");
+                       " --duration 0.05 --time-step 2e-4 --integrator imex --implicit-bending "
+                       "--output-every 60 --quiet");
   ASSERT_EQ(r.code, 0) << r.output;
   std::ifstream in(out + "/summary.json");
   const auto s = nlohmann::json::parse(in);
   EXPECT_EQ(s["params"]["solver"]["integrator"], "imex");
+  EXPECT_EQ(s["params"]["solver"]["implicit_bending"], true);
   EXPECT_EQ(s["steps"], 250);
   // --output-every: the initial state, steps 60, 120, 180, 240, and the last
   std::ifstream log(out + "/log.csv");

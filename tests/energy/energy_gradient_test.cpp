@@ -97,6 +97,47 @@ TEST(EnergyKernels, LengthHessianMatchesFiniteDifferencesOfTheGradient) {
   }
 }
 
+// The bending energy's Hessian (the stiffness of implicit bending): column k of the exact
+// Hessian is the central difference of the analytic gradient along coordinate k (straight
+// off the line, tight bend, coincident control points, random); the projected one is
+// symmetric positive semidefinite and equals the exact one where that is semidefinite.
+TEST(EnergyKernels, BendingHessianMatchesFiniteDifferencesOfTheGradient) {
+  const QuadratureTable q = simpson_table(11);
+  for (const Case& c : cases()) {
+    const Vector12d x =
+        std::string(c.name) == "straight" ? Vector12d(test::jitter(c.x, 0.02, 3)) : c.x;
+    const Matrix12d hess = bending_hessian(x, 0.5, 5.0, q, BendingHessian::EXACT);
+    const double eps = 1e-6;
+    Matrix12d fd;
+    for (int k = 0; k < 12; ++k) {
+      Vector12d xp = x, xm = x, gp = Vector12d::Zero(), gm = Vector12d::Zero();
+      xp[k] += eps;
+      xm[k] -= eps;
+      bending_kernel(xp, 0.5, 5.0, q, &gp);
+      bending_kernel(xm, 0.5, 5.0, q, &gm);
+      fd.col(k) = (gp - gm) / (2 * eps);
+    }
+    const std::string what = std::string("bending Hessian/") + c.name;
+    const double scale = fd.cwiseAbs().maxCoeff();
+    ASSERT_GT(scale, 0.0) << what;
+    EXPECT_LT((hess - fd).cwiseAbs().maxCoeff(), 1e-5 * scale) << what;
+    const Matrix12d proj = bending_hessian(x, 0.5, 5.0, q, BendingHessian::PROJECTED);
+    ASSERT_TRUE(proj.allFinite()) << what;
+    EXPECT_LT((proj - proj.transpose()).cwiseAbs().maxCoeff(), 1e-12 * scale) << what;
+    const Eigen::SelfAdjointEigenSolver<Matrix12d> ep(proj), ee(hess);
+    EXPECT_GT(ep.eigenvalues().minCoeff(), -1e-10 * scale) << what;
+    if (ee.eigenvalues().minCoeff() >= 0)
+      EXPECT_LT((proj - hess).cwiseAbs().maxCoeff(), 1e-9 * scale) << what;
+    else  // what the projection removed is the negative part only
+      EXPECT_GT((proj - hess).cwiseAbs().maxCoeff(), 0.0) << what;
+  }
+  // a straight yarn: every bending mode is stiff or free, none negative
+  const Matrix12d straight =
+      bending_hessian(straight_segment(), 0.5, 5.0, q, BendingHessian::EXACT);
+  EXPECT_GT(Eigen::SelfAdjointEigenSolver<Matrix12d>(straight).eigenvalues().minCoeff(),
+            -1e-9 * straight.cwiseAbs().maxCoeff());
+}
+
 TEST(EnergyKernels, StraightYarnHasZeroBendingEnergyAndForce) {
   const QuadratureTable q = simpson_table(11);
   Vector12d g = Vector12d::Zero();

@@ -1,5 +1,11 @@
 #include "knit/energy/bending.hpp"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <Eigen/Eigenvalues>
+#include <cmath>
+
 #include "knit/energy/segment_kernel.hpp"
 
 namespace knit {
@@ -68,6 +74,61 @@ double bending_kernel(const Vector12d& x, double rest_length, double k_bend,
 lanes::VecD bending_kernel_lanes(const lanes::VecD x[12], lanes::VecD rest_length, double k_bend,
                                  const QuadratureTable& quad, lanes::VecD grad[12]) {
   return bending_kernel_t<lanes::VecD>(x, rest_length, k_bend, quad, grad);
+}
+
+Matrix12d bending_hessian(const Vector12d& x, double rest_length, double k_bend,
+                          const QuadratureTable& quad, BendingHessian kind) {
+  const Eigen::Matrix3d eye = Eigen::Matrix3d::Identity();
+  Matrix12d h = Matrix12d::Zero();
+  for (int k = 0; k < quad.size(); ++k) {
+    const Eigen::Vector4d& db = quad.db[k];
+    const Eigen::Vector4d& ddb = quad.ddb[k];
+    Eigen::Vector3d a = Eigen::Vector3d::Zero(), b = Eigen::Vector3d::Zero();  // y', y''
+    for (int i = 0; i < 4; ++i) {
+      a += db[i] * x.segment<3>(3 * i);
+      b += ddb[i] * x.segment<3>(3 * i);
+    }
+    // κ² = f(a, b) = C g with C = |a×b|², g = s⁻³, s = |a|² + ε
+    const Eigen::Vector3d c = a.cross(b);
+    const double cc = c.squaredNorm(), ab = a.dot(b);
+    const double s = a.squaredNorm() + BEND_EPS, g = 1.0 / (s * s * s);
+    const Eigen::Vector3d ca = 2.0 * b.cross(c), cb = 2.0 * c.cross(a);  // ∂C/∂a, ∂C/∂b
+    const Eigen::Vector3d ga = (-6.0 * g / s) * a;                       // ∂g/∂a
+    const Eigen::Matrix3d caa = 2.0 * b.squaredNorm() * eye - 2.0 * b * b.transpose();
+    const Eigen::Matrix3d cbb = 2.0 * a.squaredNorm() * eye - 2.0 * a * a.transpose();
+    const Eigen::Matrix3d cab = 4.0 * a * b.transpose() - 2.0 * b * a.transpose() - 2.0 * ab * eye;
+    const Eigen::Matrix3d gaa = (-6.0 * g / s) * eye + (48.0 * g / (s * s)) * a * a.transpose();
+    const Eigen::Matrix3d faa = g * caa + ca * ga.transpose() + ga * ca.transpose() + cc * gaa;
+    const Eigen::Matrix3d fab = g * cab + ga * cb.transpose();  // ∂²f/∂a ∂b
+    const Eigen::Matrix3d fbb = g * cbb;
+    const double w = quad.w[k];
+    for (int i = 0; i < 4; ++i)
+      for (int j = 0; j < 4; ++j)
+        h.block<3, 3>(3 * i, 3 * j) +=
+            w * (db[i] * db[j] * faa + db[i] * ddb[j] * fab + ddb[i] * db[j] * fab.transpose() +
+                 ddb[i] * ddb[j] * fbb);
+  }
+  h *= k_bend * rest_length;
+  if (kind == BendingHessian::EXACT) return h;
+  // the nearest positive semidefinite matrix: negative eigenvalues set to zero. A
+  // Cholesky factor (a tenth of the eigensolver's cost) finds the definite ones first.
+  h = 0.5 * (h + h.transpose()).eval();
+  if (Eigen::LLT<Matrix12d>(h).info() == Eigen::Success) return h;
+  const Eigen::SelfAdjointEigenSolver<Matrix12d> eig(h);
+  return eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).asDiagonal() *
+         eig.eigenvectors().transpose();
+}
+
+void BendingEnergy::segment_stiffness(const Model& model, const Eigen::VectorXd& q,
+                                      std::vector<Matrix12d>& blocks) {
+  const int n = model.num_seg();
+  blocks.resize(n);
+  const double k = model.params.material.k_bend;
+  tbb::parallel_for(tbb::blocked_range<int>(0, n, 256), [&](const tbb::blocked_range<int>& r) {
+    for (int i = r.begin(); i < r.end(); ++i)
+      blocks[i] = bending_hessian(q.segment<12>(3 * model.seg_cp[i]), model.rest_length[i], k,
+                                  model.quad, BendingHessian::PROJECTED);
+  });
 }
 
 double BendingEnergy::add_force(const Model& model, const Eigen::VectorXd& q,

@@ -342,7 +342,8 @@ Params parse_params(const JsonReader& r, Params p) {
                 "constraint_tolerance",
                 "max_projection_iterations",
                 "time_step",
-                "integrator"});
+                "integrator",
+                "implicit_bending"});
   if (r.has("preset")) {
     const std::string preset = r.at("preset").string();
     if (preset == "simulation")
@@ -378,6 +379,7 @@ Params parse_params(const JsonReader& r, Params p) {
   if (r.has("length_constraints"))
     p.solver.length_constraints = r.at("length_constraints").boolean();
   if (r.has("contact")) p.material.contact = r.at("contact").boolean();
+  if (r.has("implicit_bending")) p.solver.implicit_bending = r.at("implicit_bending").boolean();
   if (r.has("constraint_tolerance"))
     p.solver.constraint_tolerance = r.at("constraint_tolerance").positive();
   if (r.has("max_projection_iterations"))

@@ -132,6 +132,7 @@ nlohmann::json params_json(const Params& p) {
           {"solver",
            {{"time_step", p.solver.time_step},
             {"integrator", integrator_name(p.solver.integrator)},
+            {"implicit_bending", p.solver.implicit_bending},
             {"length_constraints", p.solver.length_constraints},
             {"constraint_tolerance", p.solver.constraint_tolerance},
             {"max_projection_iterations", p.solver.max_projection_iterations}}},

@@ -83,7 +83,7 @@ const char* status_word(StepStatus status) {
 std::vector<std::unique_ptr<Term>> default_terms(const Model& model) {
   std::vector<std::unique_ptr<Term>> terms;
   terms.push_back(std::make_unique<Gravity>());
-  terms.push_back(std::make_unique<BendingEnergy>());
+  terms.push_back(std::make_unique<BendingEnergy>(model.params.solver.implicit_bending));
   terms.push_back(std::make_unique<LengthEnergy>());
   if (model.params.material.k_global > 0) terms.push_back(std::make_unique<GlobalDamping>());
   if (model.params.material.contact) terms.push_back(std::make_unique<ContactTerm>(model));
