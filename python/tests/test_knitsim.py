@@ -60,6 +60,10 @@ def test_the_integrator_and_step_are_parameters():
     assert k.status == "ok" and k.steps == 50
     assert k.model.integrator == "imex" and k.model.time_step == 2e-4
     assert k.summary["params"]["solver"]["integrator"] == "imex"
+    assert k.summary["params"]["solver"]["implicit_bending"] is False
+    b = knitsim.relax("stockinette", rows=4, cols=5, max_time=0.01,
+                      params={"integrator": "imex", "time_step": 2e-4, "implicit_bending": True})
+    assert b.status == "ok" and b.summary["params"]["solver"]["implicit_bending"] is True
     with pytest.raises(ValueError, match="integrator"):
         knitsim.relax("stockinette", rows=4, cols=5, max_time=0.01,
                       params={"integrator": "implicit"})
