@@ -102,7 +102,8 @@ Outcome run(const knit::Scene& base, const Spec& spec, double duration) {
 int main(int argc, char** argv) {
   std::string scene_path = KNIT_EXAMPLES "/hanging_knit.json", knit_path;
   std::string runs_text =
-      "explicit:2e-4,imex:2e-4,imex:3e-4,imex:4e-4,imex-contact:8e-4,imex-contact:1.2e-3";
+      "explicit:2e-4,imex:2e-4,imex:3e-4,imex:4e-4,imex-contact:8e-4,imex-contact:1.6e-3,"
+      "imex-contact+bending:3.2e-3";
   double end_mass_floor = -1;
   std::string reference_text = "explicit:8.474576271186441e-05";  // 1/11800 s
   double duration = 1.0;
@@ -112,7 +113,8 @@ int main(int argc, char** argv) {
   app.add_option("--knit", knit_path, "place this relaxed knit (.kstate) in the scene");
   app.add_option("--time", duration, "simulated seconds per run");
   app.add_option("--runs", runs_text,
-                 "comma-separated INTEGRATOR:H (explicit, imex or imex-contact; s)");
+                 "comma-separated INTEGRATOR:H (explicit, imex or imex-contact; s), "
+                 "INTEGRATOR+bending:H for implicit bending too");
   app.add_option("--reference", reference_text, "the reference run, INTEGRATOR:H");
   app.add_option("--threads", threads, "0 = all cores");
   app.add_option("--end-mass-floor", end_mass_floor,
