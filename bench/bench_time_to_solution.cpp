@@ -10,9 +10,9 @@
 // of the yarn's tube with an object over all its steps. Runs that go unstable say when.
 //   bench_time_to_solution [--scene S] [--knit K] [--time T]
 //                          [--runs explicit:2e-4,imex:4e-4,...] [--reference explicit:H]
-// A run named INTEGRATOR+bending:H takes the bending energy implicitly too
-// (SolverSettings::implicit_bending), e.g. imex-contact+bending:4e-3.
 //                          [--threads N] [--end-mass-floor F]
+// A run named INTEGRATOR+bending:H takes the bending energy implicitly too
+// (SolverSettings::implicit_bending), e.g. imex-contact+bending:3.2e-3.
 // --end-mass-floor: each yarn end's two control points get at least F of an interior one's
 // mass (the scene key end_mass_floor): the large steps of imex-contact otherwise fail first
 // at the light ends.
