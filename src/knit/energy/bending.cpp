@@ -1,8 +1,5 @@
 #include "knit/energy/bending.hpp"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-
 #include <Eigen/Eigenvalues>
 #include <cmath>
 
@@ -120,13 +117,9 @@ Matrix12d bending_hessian(const Vector12d& x, double rest_length, double k_bend,
 
 void BendingEnergy::segment_stiffness(const Model& model, const Eigen::VectorXd& q,
                                       std::vector<Matrix12d>& blocks) {
-  const int n = model.num_seg();
-  blocks.resize(n);
   const double k = model.params.material.k_bend;
-  tbb::parallel_for(tbb::blocked_range<int>(0, n, 256), [&](const tbb::blocked_range<int>& r) {
-    for (int i = r.begin(); i < r.end(); ++i)
-      blocks[i] = bending_hessian(q.segment<12>(3 * model.seg_cp[i]), model.rest_length[i], k,
-                                  model.quad, BendingHessian::PROJECTED);
+  segment_blocks(model, q, blocks, [&](const Vector12d& x, double rest) {
+    return bending_hessian(x, rest, k, model.quad, BendingHessian::PROJECTED);
   });
 }
 

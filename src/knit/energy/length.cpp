@@ -1,8 +1,5 @@
 #include "knit/energy/length.hpp"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-
 #include <cmath>
 
 #include "knit/energy/segment_kernel.hpp"
@@ -98,13 +95,9 @@ Matrix12d length_hessian(const Vector12d& x, double rest_length, double k_len,
 
 void LengthEnergy::segment_stiffness(const Model& model, const Eigen::VectorXd& q,
                                      std::vector<Matrix12d>& blocks) {
-  const int n = model.num_seg();
-  blocks.resize(n);
   const double k = model.params.material.k_len;
-  tbb::parallel_for(tbb::blocked_range<int>(0, n, 256), [&](const tbb::blocked_range<int>& r) {
-    for (int i = r.begin(); i < r.end(); ++i)
-      blocks[i] = length_hessian(q.segment<12>(3 * model.seg_cp[i]), model.rest_length[i], k,
-                                 model.quad, LengthHessian::PROJECTED);
+  segment_blocks(model, q, blocks, [&](const Vector12d& x, double rest) {
+    return length_hessian(x, rest, k, model.quad, LengthHessian::PROJECTED);
   });
 }
 
