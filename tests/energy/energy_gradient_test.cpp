@@ -121,6 +121,13 @@ TEST(EnergyKernels, BendingHessianMatchesFiniteDifferencesOfTheGradient) {
     const double scale = fd.cwiseAbs().maxCoeff();
     ASSERT_GT(scale, 0.0) << what;
     EXPECT_LT((hess - fd).cwiseAbs().maxCoeff(), 1e-5 * scale) << what;
+    // moving the segment as a whole changes nothing: H annihilates the translations (the
+    // projection works across them)
+    for (int axis = 0; axis < 3; ++axis) {
+      Vector12d t = Vector12d::Zero();
+      for (int a = 0; a < 4; ++a) t[3 * a + axis] = 1;
+      EXPECT_LT((hess * t).cwiseAbs().maxCoeff(), 1e-9 * scale) << what << " axis " << axis;
+    }
     const Matrix12d proj = bending_hessian(x, 0.5, 5.0, q, BendingHessian::PROJECTED);
     ASSERT_TRUE(proj.allFinite()) << what;
     EXPECT_LT((proj - proj.transpose()).cwiseAbs().maxCoeff(), 1e-12 * scale) << what;
