@@ -74,6 +74,12 @@ TEST(SceneErrors, NegativeOrNonFiniteParametersAreRejected) {
                         "scene.json")
                 .model.params.solver.integrator,
             Integrator::IMEX);
+  expect_error(scene_with(R"(, "params": {"implicit_bending": 1})"),
+               {"params.implicit_bending", "true or false"});
+  EXPECT_TRUE(
+      parse_scene(nlohmann::json::parse(scene_with(R"(, "params": {"implicit_bending": true})")),
+                  "scene.json")
+          .model.params.solver.implicit_bending);
   expect_error(scene_with(R"(, "params": {"quadrature_points": 10})"),
                {"quadrature_points", "odd"});
   // JSON text has no NaN literal, but a document built in code can hold one
