@@ -133,7 +133,8 @@ Matrix12d bending_hessian(const Vector12d& x, double rest_length, double k_bend,
     return m;
   }();
   const Eigen::Matrix<double, 9, 9> h9 = q.transpose() * h * q;
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 9, 9>> eig(0.5 * (h9 + h9.transpose()));
+  // (the solver reads one triangle: h9 needs no symmetrising)
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 9, 9>> eig(h9);
   const Eigen::Matrix<double, 12, 9> v = q * eig.eigenvectors();
   return v * eig.eigenvalues().cwiseMax(0.0).asDiagonal() * v.transpose();
 }
