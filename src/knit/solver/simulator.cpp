@@ -1,5 +1,7 @@
 #include "knit/solver/simulator.hpp"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -8,6 +10,7 @@
 #include <sstream>
 
 #include "knit/constraints/clamp.hpp"
+#include "knit/constraints/inextensibility.hpp"
 #include "knit/contact/contact_term.hpp"
 #include "knit/energy/bending.hpp"
 #include "knit/energy/global_damping.hpp"
@@ -262,6 +265,12 @@ bool Simulator::imex_step(const State& s, double h, Eigen::VectorXd& q_out,
     ScopedTimer timer(m_data.stage_seconds[std::string(term->name())]);
     term->add_force(m_model, m_qmid, m_vmid, s.time + 0.5 * h, m_force);
   }
+  // the length constraints in the solve, as a stiff penalty on their linearisation
+  if (m_model.params.solver.length_constraints) {
+    if (!any) m_blocks.assign(m_model.num_seg(), Matrix12d::Zero());
+    any = true;
+    add_length_rows(s, h);
+  }
   // v⁺ = v + h M⁻¹ (f_E(mid) + f_I(q⁺)), f_I(q⁺) ≈ f_I(q) − K (q⁺ − q), q⁺ = q + h v⁺:
   // (M + h² K) Δv = h (f_E(mid) + f_I(q)) − h² K v
   if (!any) {
@@ -288,6 +297,9 @@ bool Simulator::imex_step(const State& s, double h, Eigen::VectorXd& q_out,
     const int base = 3 * m_model.seg_cp[i];
     m_rhs.segment<12>(base) -= (h * h) * (m_blocks[i] * s.v.segment<12>(base));
   }
+  // the length rows' −ρ ∇C C / h (their −ρ ∇C ∇Cᵀ v is in the blocks' product above)
+  for (size_t i = 0; i < m_len_c.size(); ++i)
+    m_rhs.segment<12>(3 * m_model.seg_cp[i]) -= (m_len_rho[i] * m_len_c[i] / h) * m_len_grad[i];
   if (m_has_operator_terms) {
     // − h² K_op v, the operator terms' share of − h² K v
     m_cg_kx.setZero(s.q.size());
@@ -312,6 +324,34 @@ bool Simulator::imex_step(const State& s, double h, Eigen::VectorXd& q_out,
   q_out = s.q + h * v_out;
   record_solve_forces(q_out, s.time + h, h);
   return true;
+}
+
+void Simulator::add_length_rows(const State& s, double h) {
+  // Left to the projection after the solve (which moves the yarn in the metric M, not in
+  // M + h² K), the length constraints make a rest of every q where the solve's response to
+  // the force, (M + h² K)⁻¹ h f, lies along M⁻¹ ∇Cᵀ: the projection takes back what the
+  // solve moved, and a spurious force h² K M⁻¹ ∇Cᵀ λ is left standing, large where a yarn
+  // under tension has stiff contact in K. Held in the solve, ∇C_i (v + Δv) = −C_i / h, the
+  // constraints take up only the force along ∇Cᵀ. They are held as a stiff penalty
+  // ½ ρ_i (∇C_i (v + Δv) + C_i / h)², ρ_i ∇C_iᵀ ∇C_i joining segment i's block of the band,
+  // with ρ_i = LENGTH_ROW_STIFFNESS · μ ℓ_i³. A yarn resting across a taut one under 10 g
+  // (imex-contact, 5e-4 s, from the explicit step's rest at d = 0.915) drifts to d = 0.79
+  // without the rows, 0.82 at 10⁴, 0.86 at 10⁶ and stays at 0.915 from 10⁸ (docs/model.md
+  // §5.2); 10¹⁰ and 10¹² change nothing more.
+  const int n_seg = m_model.num_seg();
+  m_len_grad.resize(n_seg);
+  m_len_c.resize(n_seg);
+  m_len_rho.resize(n_seg);
+  const double mu = m_model.params.material.density;
+  tbb::parallel_for(tbb::blocked_range<int>(0, n_seg, 256), [&](const tbb::blocked_range<int>& r) {
+    for (int i = r.begin(); i < r.end(); ++i) {
+      const double l = m_model.rest_length[i];
+      m_len_c[i] = length_constraint(gather_segment(s.q, m_model.seg_cp[i]), l, m_model.quad,
+                                     &m_len_grad[i]);
+      m_len_rho[i] = LENGTH_ROW_STIFFNESS * mu * l * l * l;
+      m_blocks[i] += (m_len_rho[i] / (h * h)) * (m_len_grad[i] * m_len_grad[i].transpose());
+    }
+  });
 }
 
 void Simulator::solve_with_operator(double h) {

@@ -92,8 +92,10 @@ class Simulator {
   /// Without them the solve (which sees K but not the constraint) and the projection
   /// after it (which sees the constraint but not K, in the metric M) would come to rest
   /// where they balance, not where the forces do: up to 10⁵ cm/s² of net force left on a
-  /// glued yarn end, 5 × 10⁵ on a pinned one. Returns false when M + h² K could not be
-  /// factored.
+  /// glued yarn end, 5 × 10⁵ on a pinned one. The length constraints (with
+  /// params.solver.length_constraints) enter as stiff penalty rows on their linearisation,
+  /// ρ_i ∇C_iᵀ ∇C_i in segment i's block (add_length_rows), for the same reason. Returns
+  /// false when M + h² K could not be factored.
   bool imex_step(const State& state, double h, Eigen::VectorXd& q_out, Eigen::VectorXd& v_out);
   /// Stage 2: projects q (in place) at `time`, correcting v by the displacement / h.
   ProjectionResult project(Eigen::VectorXd& q, Eigen::VectorXd& v, double time, double h);
@@ -178,6 +180,12 @@ class Simulator {
   void add_operator_product(const Eigen::VectorXd& x, Eigen::VectorXd& y) const;
   void band_product(const Eigen::VectorXd& x, double h2, Eigen::VectorXd& y) const;
   void solve_with_operator(double h);
+  // the length constraints as rows of the IMEX solve: their gradients ∇C_i, values C_i and
+  // penalty stiffness ρ_i at the step's start
+  void add_length_rows(const State& state, double h);
+  static constexpr double LENGTH_ROW_STIFFNESS = 1e8;
+  std::vector<Vector12d> m_len_grad;
+  std::vector<double> m_len_c, m_len_rho;
   static constexpr int MAX_CG_ITERATIONS = 100;
   // the solve stops when the residual is this fraction of the right-hand side (a hanging
   // 12×12 at h = 1.6e-3 s: 1e-3 lies within 1.2 r of 1e-6 after 0.2 s with 3× fewer
