@@ -219,7 +219,7 @@ namespace {
 // The exact Hessian is the derivative of the gradient (central differences of
 // contact_pair_gradient); the projected one is positive semidefinite, drops only the
 // negative transverse part, and has the same normal stiffness: Δᵀ H Δ agrees along the
-// contact normals.
+// contact normals; the mirrored one turns the transverse part's sign instead.
 TEST(ContactKernel, HessianMatchesFiniteDifferencesOfTheGradient) {
   const auto [xi, xj] = curved_skew_pair(7);
   const Params p;
@@ -262,6 +262,19 @@ TEST(ContactKernel, HessianMatchesFiniteDifferencesOfTheGradient) {
   EXPECT_EQ(
       max_abs(contact_pair_hessian(xi, far, li, lj, p, quad10(), ContactHessian::EXACT).reshaped()),
       0.0);
+  // mirrored: the exact transverse part with its sign turned, so 2 × projected − exact;
+  // positive semidefinite, stiffer than the projected one, and no stiffness for a
+  // translation
+  const Eigen::Matrix<double, 24, 24> mirrored =
+      contact_pair_hessian(xi, xj, li, lj, p, quad10(), ContactHessian::MIRRORED);
+  EXPECT_LT(max_abs((mirrored - (2 * projected - exact)).reshaped()),
+            1e-12 * max_abs(exact.reshaped()));
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 24, 24>> eig_mirrored(mirrored);
+  EXPECT_GT(eig_mirrored.eigenvalues().minCoeff(), -1e-9 * eig_mirrored.eigenvalues().maxCoeff());
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 24, 24>> above(mirrored - projected);
+  EXPECT_GT(above.eigenvalues().minCoeff(), -1e-9 * eig_mirrored.eigenvalues().maxCoeff());
+  EXPECT_GT(above.eigenvalues().maxCoeff(), 0.0) << "the transverse part is missing";
+  EXPECT_LT(max_abs(mirrored * shift), 1e-9 * max_abs(mirrored.reshaped()));
 }
 
 TEST(ContactKernel, SecondDerivativeOfThePotential) {

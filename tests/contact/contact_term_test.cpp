@@ -447,9 +447,9 @@ namespace knit {
 namespace {
 
 // The stiffness operator of the IMEX_CONTACT step against a brute-force oracle: K x for
-// random x equals Σ over all non-neighbour segment pairs of the dense projected pair
-// Hessians (contact_pair_hessian) applied to x; its segment parts are the oracle's
-// blocks on each segment's own control points; and it is symmetric positive
+// random x equals Σ over all non-neighbour segment pairs of the dense pair Hessians
+// made semidefinite (contact_pair_hessian, ContactHessian::MIRRORED) applied to x; its segment
+// parts are the oracle's blocks on each segment's own control points; and it is symmetric positive
 // semidefinite (xᵀ K y = yᵀ K x, xᵀ K x ≥ 0).
 TEST(ContactTerm, StiffnessOperatorMatchesTheDensePairHessians) {
   const Sample s = pressed_patch();
@@ -466,7 +466,7 @@ TEST(ContactTerm, StiffnessOperatorMatchesTheDensePairHessians) {
       if (m.neighbours(i, j)) continue;
       const Eigen::Matrix<double, 24, 24> hess = contact_pair_hessian(
           gather_segment(s.q, m.seg_cp[i]), gather_segment(s.q, m.seg_cp[j]), m.rest_length[i],
-          m.rest_length[j], m.params, m.contact_quad, ContactHessian::PROJECTED);
+          m.rest_length[j], m.params, m.contact_quad, ContactHessian::MIRRORED);
       Eigen::Matrix<double, 24, 1> xij;
       xij << x.segment<12>(3 * m.seg_cp[i]), x.segment<12>(3 * m.seg_cp[j]);
       const Eigen::Matrix<double, 24, 1> y = hess * xij;

@@ -471,7 +471,7 @@ TEST(Imex, ContactImplicitHoldsAHangingKnitWhereContactBoundsTheImexStep) {
   const double r = Params{}.material.radius;
   const Eigen::VectorXd diff = implicit.s.q - reference.s.q;
   const double moved = diff.reshaped(3, diff.size() / 3).colwise().norm().maxCoeff();
-  // a first-order step's shape at one instant of a swing: 13.6 r since the length
+  // a first-order step's shape at one instant of a swing: 13.6–13.8 r since the length
   // constraints joined the solve (under 10 r before; the explicit step at 1/11800 s lies
   // 5.8 r from IMEX at 4e-4 s and 16 r from this one, bench_time_to_solution --time 0.1)
   EXPECT_LT(moved, 15 * r) << "largest control-point distance from IMEX at 4e-4 s (cm)";

@@ -109,8 +109,11 @@ Eigen::Matrix<double, 24, 24> contact_pair_hessian(const Vector12d& xi, const Ve
       const Eigen::Vector3d nhat = diff / dist;
       const Eigen::Matrix3d nn = nhat * nhat.transpose();
       Eigen::Matrix3d h = (c * contact_potential_d2(d) / (two_r * two_r)) * nn;
+      const double transverse = c * contact_potential_d1(d) / (two_r * dist);
       if (kind == ContactHessian::EXACT)
-        h += (c * contact_potential_d1(d) / (two_r * dist)) * (Eigen::Matrix3d::Identity() - nn);
+        h += transverse * (Eigen::Matrix3d::Identity() - nn);
+      else if (kind == ContactHessian::MIRRORED)
+        h += std::abs(transverse) * (Eigen::Matrix3d::Identity() - nn);
       // J_p: −B_a(t_a) on x_i's control points, +B_b(t_b) on x_j's
       double coef[8];
       for (int k = 0; k < 4; ++k) {

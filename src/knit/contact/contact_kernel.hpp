@@ -58,9 +58,12 @@ inline double contact_potential_d2(double d) {
 /// y_i(t_a), n̂ = Δ/|Δ| and c = k ℓ_i ℓ_j w_a w_b, the Hessian of c f(|Δ|/2r) in Δ is
 ///   c f''(d)/(2r)² n̂n̂ᵀ + c f'(d)/(2r |Δ|) (I − n̂n̂ᵀ).
 /// f' < 0 inside the contact distance, so the transverse part is negative: EXACT keeps it,
-/// PROJECTED (positive semidefinite, for a Newton or linearly implicit step) drops it —
-/// the stiffness of the normal direction alone, what resists the tubes' approach.
-enum class ContactHessian { EXACT, PROJECTED };
+/// PROJECTED (positive semidefinite) drops it — the stiffness of the normal direction
+/// alone, what resists the tubes' approach — and MIRRORED (positive semidefinite, what the
+/// IMEX_CONTACT step uses) takes its absolute value, c |f'(d)|/(2r |Δ|) (I − n̂n̂ᵀ): the
+/// rate at which the force turns as the pair slides past each other, which a step taken
+/// with the normals held fixed otherwise leaves out. MIRRORED = 2 PROJECTED − EXACT.
+enum class ContactHessian { EXACT, PROJECTED, MIRRORED };
 
 /// Result of one segment pair: energy, forces and a count of the point pairs in contact.
 struct ContactPairResult {

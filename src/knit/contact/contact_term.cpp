@@ -300,9 +300,11 @@ void ContactTerm::pair_kernel(const Model& model, int i, int j, RowStats& row) {
         const double dist = std::sqrt(d2row[kb]);
         const double inv = 1.0 / dist;
         const double d = dist * std::sqrt(inv_four_r2);
-        m_row_stiff[i].push_back({j, a, jb[kb], (bx[kb] - m_px[bi + a]) * inv,
-                                  (by[kb] - m_py[bi + a]) * inv, (bz[kb] - m_pz[bi + a]) * inv,
-                                  kl * quad.w[a] * bw[kb] * contact_potential_d2(d) * inv_four_r2});
+        m_row_stiff[i].push_back(
+            {j, a, jb[kb], (bx[kb] - m_px[bi + a]) * inv, (by[kb] - m_py[bi + a]) * inv,
+             (bz[kb] - m_pz[bi + a]) * inv,
+             kl * quad.w[a] * bw[kb] * contact_potential_d2(d) * inv_four_r2,
+             kl * quad.w[a] * bw[kb] * std::abs(contact_potential_d1(d)) / (2 * r * dist)});
       }
   }
   // the smallest squared distance over all lanes is < 4r² exactly when some pair is in
@@ -506,8 +508,8 @@ void ContactTerm::add_stiffness_product(const Model& model, const Eigen::VectorX
   const int rows = std::min<int>(m_num_seg, static_cast<int>(m_stiff_offset.size()) - 1);
   if (rows <= 0) return;  // no evaluation yet
   m_stiff_product.resize(m_stiff_pairs.size());
-  // per point pair: f = k n̂ (n̂·u), u = J x the change of Δ = y_j(t_b) − y_i(t_a); K x puts
-  // B_b f on j's control points and −B_a f on i's. Here the scalar k n̂·u
+  // per point pair: f = k n̂ (n̂·u) + kt (u − n̂ (n̂·u)), u = J x the change of
+  // Δ = y_j(t_b) − y_i(t_a); K x puts B_b f on j's control points and −B_a f on i's
   tbb::parallel_for(tbb::blocked_range<int>(0, rows, 16), [&](const tbb::blocked_range<int>& r) {
     for (int i = r.begin(); i < r.end(); ++i) {
       const double* xi = x.data() + 3 * model.seg_cp[i];
@@ -519,7 +521,9 @@ void ContactTerm::add_stiffness_product(const Model& model, const Eigen::VectorX
         double u[3] = {0, 0, 0};
         for (int c = 0; c < 4; ++c)
           for (int d = 0; d < 3; ++d) u[d] += bb[c] * xj[3 * c + d] - ba[c] * xi[3 * c + d];
-        m_stiff_product[k] = p.k * (p.nx * u[0] + p.ny * u[1] + p.nz * u[2]);
+        const Eigen::Vector3d uv(u[0], u[1], u[2]), n(p.nx, p.ny, p.nz);
+        const double un = n.dot(uv);
+        m_stiff_product[k] = (p.k - p.kt) * un * n + p.kt * uv;
       }
     }
   });
@@ -527,11 +531,7 @@ void ContactTerm::add_stiffness_product(const Model& model, const Eigen::VectorX
   // k < s that have it as j, in ascending k
   m_product_accumulator.run(model, [&](int s, Vector12d& slot) {
     if (s >= rows) return 0.0;
-    auto force = [&](int k) {
-      const StiffPair& p = m_stiff_pairs[k];
-      const double f = m_stiff_product[k];
-      return Eigen::Vector3d(f * p.nx, f * p.ny, f * p.nz);
-    };
+    auto force = [&](int k) -> const Eigen::Vector3d& { return m_stiff_product[k]; };
     for (int k = m_stiff_offset[s]; k < m_stiff_offset[s + 1]; ++k) {
       const Eigen::Vector3d f = force(k);
       const std::array<double, 4>& ba = m_basis[m_stiff_pairs[k].a];
@@ -553,12 +553,12 @@ void ContactTerm::add_operator_segment_stiffness(const Model& /*model*/,
   if (!m_stiffness) return;
   const int rows = std::min<int>(m_num_seg, static_cast<int>(m_stiff_offset.size()) - 1);
   if (rows <= 0) return;  // no evaluation yet
-  // k (B Bᵀ) ⊗ n̂n̂ᵀ, its upper triangle of 3×3 blocks, then mirrored
+  // (B Bᵀ) ⊗ (k n̂n̂ᵀ + kt (I − n̂n̂ᵀ)), its upper triangle of 3×3 blocks, then mirrored
   auto add = [](Matrix12d& block, const std::array<double, 4>& b, const StiffPair& p) {
     const double n[3] = {p.nx, p.ny, p.nz};
     double nn[3][3];
     for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 3; ++c) nn[r][c] = p.k * n[r] * n[c];
+      for (int c = 0; c < 3; ++c) nn[r][c] = (p.k - p.kt) * n[r] * n[c] + (r == c ? p.kt : 0.0);
     for (int u = 0; u < 4; ++u)
       for (int v = u; v < 4; ++v) {
         const double w = b[u] * b[v];

@@ -129,8 +129,9 @@ class ContactTerm : public Term {
   /// evaluation (brute force leaves the pair list empty).
   void record(StepData& data) const override;
 
-  /// The contact energy's projected Hessian (ContactHessian::PROJECTED: per point pair in
-  /// contact, its normal stiffness c f''(d)/(2r)² along n̂) as an operator, for the
+  /// The contact energy's Hessian made semidefinite (ContactHessian::MIRRORED: per point
+  /// pair in contact, its normal stiffness c f''(d)/(2r)² along n̂ and the absolute value
+  /// of its transverse one across) as an operator, for the
   /// IMEX_CONTACT integrator. Needs BVH culling (std::logic_error otherwise).
   bool has_operator_stiffness() const override { return true; }
   void set_operator_stiffness(bool on) override;
@@ -138,8 +139,8 @@ class ContactTerm : public Term {
   /// fixed order: the result does not depend on the thread count).
   void add_stiffness_product(const Model& model, const Eigen::VectorXd& x,
                              Eigen::VectorXd& y) const override;
-  /// Per point pair, k (B_a B_aᵀ) ⊗ n̂n̂ᵀ into segment i's block and k (B_b B_bᵀ) ⊗ n̂n̂ᵀ
-  /// into j's: the operator without its coupling of i to j.
+  /// Per point pair, (B_a B_aᵀ) ⊗ H into segment i's block and (B_b B_bᵀ) ⊗ H into j's,
+  /// H = k n̂n̂ᵀ + kt (I − n̂n̂ᵀ): the operator without its coupling of i to j.
   void add_operator_segment_stiffness(const Model& model,
                                       std::vector<Matrix12d>& blocks) const override;
 
@@ -157,11 +158,12 @@ class ContactTerm : public Term {
     Eigen::Vector3d delta;         // y_j − y_i at that point pair (cm)
     int point_a = 0, point_b = 0;  // its contact points on i and on j
   };
-  // a point pair in contact of row i's segment pair (i, j): its points, its normal and
-  // normal stiffness k = c f''(d)/(2r)² (dyn/cm)
+  // a point pair in contact of row i's segment pair (i, j): its points, its normal, its
+  // normal stiffness k = c f''(d)/(2r)² and its transverse one kt = c |f'(d)|/(2r |Δ|)
+  // (dyn/cm; ContactHessian::MIRRORED)
   struct StiffPair {
     int j = 0, a = 0, b = 0;
-    double nx = 0, ny = 0, nz = 0, k = 0;
+    double nx = 0, ny = 0, nz = 0, k = 0, kt = 0;
   };
   // per-segment (row) outputs of the kernel stage
   struct RowStats {
@@ -221,7 +223,7 @@ class ContactTerm : public Term {
   // operator's products visit them in this fixed order, from contiguous memory
   std::vector<StiffPair> m_stiff_pairs;
   std::vector<int> m_stiff_offset, m_stiff_in_offset, m_stiff_in, m_stiff_fill;
-  mutable std::vector<double> m_stiff_product;  // per point pair: k n̂·(J x) (dyn)
+  mutable std::vector<Eigen::Vector3d> m_stiff_product;  // per point pair: H (J x) (dyn)
   std::vector<RowStats> m_rows;
   std::vector<std::vector<ContactPointPair>> m_row_records;
   std::vector<std::vector<StiffPair>> m_row_stiff;  // per row i, with m_stiffness
