@@ -97,7 +97,7 @@ void add_integrator_option(CLI::App* cmd, std::string& integrator) {
                   "but the length energy taken by a linearly implicit Euler step, which lifts "
                   "the time-step limit its stiffness sets; imex-contact: yarn–yarn contact "
                   "implicit too, which lifts the limit contact sets in simulation (a 42×32 "
-                  "knit hanging holds 8e-4 s, not 1.6e-3 s: watch the closest approach d; "
+                  "knit hanging holds 1.6e-3 s, not 2e-3 s: watch the closest approach d; "
                   "docs/model.md §5.2)")
       ->check(CLI::IsMember(knit::integrator_names()));
 }
