@@ -479,6 +479,17 @@ TEST(ContactTerm, StiffnessOperatorMatchesTheDensePairHessians) {
   term.add_stiffness_product(m, x, kx);
   ASSERT_GT(max_abs(oracle_x), 0.0);
   EXPECT_LT(max_abs(kx - oracle_x), 1e-9 * max_abs(oracle_x));
+  // the product's rows at a window of control points (as the clamps' reaction takes them)
+  // from the segments that touch the window alone
+  const int cp0 = m.num_cp() / 3, cp1 = cp0 + 8;
+  std::vector<int> touching;
+  for (int i = 0; i < m.num_seg(); ++i)
+    if (m.seg_cp[i] + 3 >= cp0 && m.seg_cp[i] <= cp1) touching.push_back(i);
+  Eigen::VectorXd rows = Eigen::VectorXd::Zero(n);
+  term.add_stiffness_product_rows(m, x, touching, rows);
+  const Eigen::VectorXd window = oracle_x.segment(3 * cp0, 3 * (cp1 - cp0 + 1));
+  ASSERT_GT(max_abs(window), 0.0);
+  EXPECT_LT(max_abs(rows.segment(3 * cp0, window.size()) - window), 1e-9 * max_abs(oracle_x));
   std::vector<Matrix12d> blocks(m.num_seg(), Matrix12d::Zero());
   term.add_operator_segment_stiffness(m, blocks);
   double worst = 0, scale = 0;

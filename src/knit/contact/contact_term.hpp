@@ -139,6 +139,9 @@ class ContactTerm : public Term {
   /// fixed order: the result does not depend on the thread count).
   void add_stiffness_product(const Model& model, const Eigen::VectorXd& x,
                              Eigen::VectorXd& y) const override;
+  void add_stiffness_product_rows(const Model& model, const Eigen::VectorXd& x,
+                                  const std::vector<int>& segments,
+                                  Eigen::VectorXd& y) const override;
   /// Per point pair, (B_a B_aᵀ) ⊗ H into segment i's block and (B_b B_bᵀ) ⊗ H into j's,
   /// H = k n̂n̂ᵀ + kt (I − n̂n̂ᵀ): the operator without its coupling of i to j.
   void add_operator_segment_stiffness(const Model& model,

@@ -46,6 +46,12 @@ class Term {
   /// semidefinite) at the q of the last add_force. x and y: 3 × control points.
   virtual void add_stiffness_product(const Model& model, const Eigen::VectorXd& x,
                                      Eigen::VectorXd& y) const {}
+  /// The same product's rows at the control points of `segments` alone (ascending, no
+  /// repeats): exact at a control point all of whose segments are listed, partial at the
+  /// others (the clamps' reaction needs a few rows, not the whole product).
+  virtual void add_stiffness_product_rows(const Model& model, const Eigen::VectorXd& x,
+                                          const std::vector<int>& segments,
+                                          Eigen::VectorXd& y) const {}
   /// Where add_stiffness_product applies: adds into blocks[i] the part of that stiffness
   /// on segment i's own four control points (the preconditioner of the solve).
   virtual void add_operator_segment_stiffness(const Model& model,

@@ -429,6 +429,13 @@ void Simulator::build_solve_constraints() {
       m_fixed_dofs.push_back(d);
       m_fixed_group.push_back(owner[d]);
     }
+  // the segments that touch a clamped control point: the rows of the clamps' reaction
+  for (int i = 0; i < m_model.num_seg(); ++i)
+    for (int c = 0; c < 4; ++c)
+      if (fixed[3 * (m_model.seg_cp[i] + c)]) {
+        m_fixed_segments.push_back(i);
+        break;
+      }
   m_solve_force.assign(groups, Eigen::Vector3d::Zero());
   m_solve_torque.assign(groups, Eigen::Vector3d::Zero());
   // glues and pins (few rows, constant ∇C) as constraints of the solve; a row on fixed
@@ -474,18 +481,14 @@ void Simulator::hold_glues_in_solve(const State& s, double h, Eigen::VectorXd& d
   // first entry), S = J A⁻¹ Jᵀ = Wᵀ W; J (v + Δv₀ − A⁻¹ Jᵀ μ) = −C(q, t + h) / h, and
   // A⁻¹ Jᵀ μ = L⁻ᵀ (W μ): one backward solve
   const int n = static_cast<int>(dv.size());
-  m_glue_y.resize(n, m);
-  Eigen::VectorXd column(n);
-  for (int r = 0; r < m; ++r) {
-    column.setZero();
-    int first = n;
+  m_glue_y.setZero(n, m);
+  int first = n;
+  for (int r = 0; r < m; ++r)
     for (const auto& [dof, value] : m_glue_rows[r]) {
-      column[dof] = value;
+      m_glue_y(dof, r) = value;
       first = std::min(first, dof);
     }
-    m_stiff.forward(column, first);
-    m_glue_y.col(r) = column;
-  }
+  m_stiff.forward(m_glue_y, first);  // every column in one pass
   const Eigen::MatrixXd S = m_glue_y.transpose() * m_glue_y;
   Eigen::VectorXd rhs(m);
   int offset = 0;
@@ -501,7 +504,7 @@ void Simulator::hold_glues_in_solve(const State& s, double h, Eigen::VectorXd& d
     rhs[r] = jv + m_glue_c[m_glue_row_of[r]] / h;
   }
   m_glue_mu = S.ldlt().solve(rhs);
-  column = m_glue_y * m_glue_mu;
+  Eigen::VectorXd column = m_glue_y * m_glue_mu;
   m_stiff.backward(column);
   dv -= column;
 }
@@ -523,15 +526,21 @@ void Simulator::record_solve_forces(const Eigen::VectorXd& q, double time, doubl
   };
   // the clamps: what held their control points to the given velocities
   if (m_has_operator_terms) {
-    // the factor's rows hold the preconditioner's blocks: A Δv − b from the terms instead
-    m_cg_ap.resize(m_dv.size());
-    band_product(m_dv, h * h, m_cg_ap);
+    // the factor's rows hold the preconditioner's blocks: A Δv − b from the terms instead,
+    // on the rows of the segments that touch a clamped control point alone
+    const double h2 = h * h;
     m_cg_kx.setZero(m_dv.size());
-    add_operator_product(m_dv, m_cg_kx);
+    for (int i : m_fixed_segments) {
+      const int base = 3 * m_model.seg_cp[i];
+      m_cg_kx.segment<12>(base) += m_blocks[i] * m_dv.segment<12>(base);
+    }
+    for (const auto& term : m_terms)
+      if (term->has_operator_stiffness() && implicit(*term))
+        term->add_stiffness_product_rows(m_model, m_dv, m_fixed_segments, m_cg_kx);
     m_fixed_residual.resize(m_fixed_dofs.size());
     for (size_t k = 0; k < m_fixed_dofs.size(); ++k) {
       const int d = m_fixed_dofs[k];
-      m_fixed_residual[k] = m_cg_ap[d] + h * h * m_cg_kx[d] - m_b_fixed[k];
+      m_fixed_residual[k] = m_model.mass[d / 3] * m_dv[d] + h2 * m_cg_kx[d] - m_b_fixed[k];
     }
   } else {
     m_stiff.fixed_residuals(m_dv, m_b_fixed, m_fixed_residual);

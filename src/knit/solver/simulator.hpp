@@ -160,6 +160,7 @@ class Simulator {
   };
   std::vector<ClampedPoint> m_clamped;
   std::vector<int> m_fixed_dofs;
+  std::vector<int> m_fixed_segments;  // those touching a clamped control point
   std::vector<const ConstraintGroup*> m_solve_groups;
   // per row: its free coordinates, all its coordinates, its index among the groups' rows
   std::vector<std::vector<std::pair<int, double>>> m_glue_rows, m_glue_rows_all;
@@ -172,7 +173,7 @@ class Simulator {
   std::vector<Eigen::Vector3d> m_solve_force, m_solve_torque, m_solve_about;
   void record_solve_forces(const Eigen::VectorXd& q, double time, double h);
   Eigen::VectorXd m_glue_c;
-  Eigen::MatrixXd m_glue_y;  // L⁻¹ ∇Cᵀ, with M + h² K = L Lᵀ
+  StiffSolver::RowMajorMatrix m_glue_y;  // L⁻¹ ∇Cᵀ, with M + h² K = L Lᵀ
   // IMEX_CONTACT: whether a term is taken implicitly; the operator terms' part of the
   // solve by preconditioned conjugate gradients
   bool implicit(const Term& term) const;

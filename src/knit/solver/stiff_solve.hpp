@@ -37,6 +37,10 @@ class StiffSolver {
   /// solves Lᵀ x = y in place. A = L Lᵀ, so Jᵀ A⁻¹ J = Wᵀ W with W = L⁻¹ Jᵀ.
   void forward(Eigen::VectorXd& x, int first = 0) const;
   void backward(Eigen::VectorXd& x) const;
+  /// forward on every column of X at once (one pass over the factor; X row-major, its
+  /// columns zero before `first`)
+  using RowMajorMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  void forward(RowMajorMatrix& X, int first = 0) const;
   /// The fixed coordinates given in factor, in order.
   const std::vector<int>& fixed() const { return m_fixed_dofs; }
   /// What the fixed coordinates' own rows of the original matrix leave over at x:
