@@ -171,6 +171,7 @@ void ContactTerm::pair_kernel(const Model& model, int i, int j, RowStats& row) {
   // point pair within 2r (see add_force_bvh) and is not counted
   if (!m_boxes[i].overlaps(m_boxes[j])) return;
   ++row.candidates;
+  const int stiff_begin = m_stiffness ? static_cast<int>(m_row_stiff[i].size()) : 0;
   const int P = m_points;
   const Params& prm = model.params;
   const QuadratureTable& quad = model.contact_quad;
@@ -326,6 +327,10 @@ void ContactTerm::pair_kernel(const Model& model, int i, int j, RowStats& row) {
   PairForce& pf = m_pairs[i].emplace_back();
   pf.j = j;
   pf.min_d2 = lane_min;
+  if (m_stiffness) {
+    pf.stiff_begin = stiff_begin;
+    pf.stiff_end = static_cast<int>(m_row_stiff[i].size());
+  }
   for (int l = 0; l < LANES; ++l)
     if (min_d2[l] == lane_min) {
       pf.delta = Eigen::Vector3d(mdx[l], mdy[l], mdz[l]);
@@ -480,13 +485,32 @@ void ContactTerm::index_incoming_pairs(int n) {
       std::copy(m_row_stiff[i].begin(), m_row_stiff[i].end(),
                 m_stiff_pairs.begin() + m_stiff_offset[i]);
   });
-  // per segment, the point pairs that have it as j, in ascending index
-  m_stiff_in_offset.assign(n + 1, 0);
-  for (const StiffPair& p : m_stiff_pairs) ++m_stiff_in_offset[p.j + 1];
+  // per segment, the point pairs that have it as j, in ascending index: those of its
+  // incoming segment pairs (ascending row k; row k's point pairs with j are one run)
+  m_stiff_in_offset.resize(n + 1);
+  m_stiff_in_offset[0] = 0;
+  tbb::parallel_for(tbb::blocked_range<int>(0, n, 256), [&](const tbb::blocked_range<int>& r) {
+    for (int s = r.begin(); s < r.end(); ++s) {
+      int count = 0;
+      for (const Incoming& in : m_incoming[s]) {
+        const PairForce& pf = m_pairs[in.k][in.index];
+        count += pf.stiff_end - pf.stiff_begin;
+      }
+      m_stiff_in_offset[s + 1] = count;
+    }
+  });
   for (int i = 0; i < n; ++i) m_stiff_in_offset[i + 1] += m_stiff_in_offset[i];
   m_stiff_in.resize(total);
-  m_stiff_fill.assign(m_stiff_in_offset.begin(), m_stiff_in_offset.end() - 1);
-  for (int p = 0; p < total; ++p) m_stiff_in[m_stiff_fill[m_stiff_pairs[p].j]++] = p;
+  tbb::parallel_for(tbb::blocked_range<int>(0, n, 256), [&](const tbb::blocked_range<int>& r) {
+    for (int s = r.begin(); s < r.end(); ++s) {
+      int at = m_stiff_in_offset[s];
+      for (const Incoming& in : m_incoming[s]) {
+        const PairForce& pf = m_pairs[in.k][in.index];
+        for (int t = pf.stiff_begin; t < pf.stiff_end; ++t)
+          m_stiff_in[at++] = m_stiff_offset[in.k] + t;
+      }
+    }
+  });
 }
 
 void ContactTerm::set_operator_stiffness(bool on) {
@@ -591,68 +615,71 @@ void ContactTerm::add_stiffness_product_rows(const Model& model, const Eigen::Ve
   }
 }
 
-void ContactTerm::add_operator_segment_stiffness(const Model& /*model*/,
+void ContactTerm::add_operator_segment_stiffness(const Model& model,
                                                  std::vector<Matrix12d>& blocks) const {
-  if (!m_stiffness) return;
+  tbb::parallel_for(tbb::blocked_range<int>(0, static_cast<int>(blocks.size()), 16),
+                    [&](const tbb::blocked_range<int>& r) {
+                      for (int s = r.begin(); s < r.end(); ++s)
+                        add_operator_segment_block(model, s, blocks[s]);
+                    });
+}
+
+bool ContactTerm::add_operator_segment_block(const Model& /*model*/, int s,
+                                             Matrix12d& block) const {
+  if (!m_stiffness) return false;
   const int rows = std::min<int>(m_num_seg, static_cast<int>(m_stiff_offset.size()) - 1);
-  if (rows <= 0) return;  // no evaluation yet
+  if (s >= rows) return false;  // (no evaluation yet)
+  if (m_stiff_offset[s] == m_stiff_offset[s + 1] &&
+      m_stiff_in_offset[s] == m_stiff_in_offset[s + 1])
+    return false;
   // Σ_a (b_a b_aᵀ) ⊗ S_a, S_a = Σ over the point pairs at the segment's point a of
   // k n̂n̂ᵀ + kt (I − n̂n̂ᵀ): the 3×3 sums first, per point (6 numbers, symmetric), then one
   // Kronecker product per point in contact, its upper triangle of 3×3 blocks, then mirrored
   // (per point pair, the product cost 90 multiply-adds; per point it costs 60, and a pair
   // only 6)
-  const int points = m_points;
-  tbb::parallel_for(tbb::blocked_range<int>(0, rows, 16), [&](const tbb::blocked_range<int>& r) {
-    std::array<std::array<double, 6>, MAX_CONTACT_POINTS> S;
-    std::array<char, MAX_CONTACT_POINTS> used;
-    for (int s = r.begin(); s < r.end(); ++s) {
-      used.fill(0);
-      auto add = [&](int a, const StiffPair& p) {
-        std::array<double, 6>& m = S[a];
-        if (!used[a]) {
-          m.fill(0.0);
-          used[a] = 1;
-        }
-        const double kn = p.k - p.kt;
-        const double x = kn * p.nx, y = kn * p.ny, z = kn * p.nz;
-        m[0] += x * p.nx + p.kt;
-        m[1] += x * p.ny;
-        m[2] += x * p.nz;
-        m[3] += y * p.ny + p.kt;
-        m[4] += y * p.nz;
-        m[5] += z * p.nz + p.kt;
-      };
-      for (int k = m_stiff_offset[s]; k < m_stiff_offset[s + 1]; ++k)
-        add(m_stiff_pairs[k].a, m_stiff_pairs[k]);
-      for (int q = m_stiff_in_offset[s]; q < m_stiff_in_offset[s + 1]; ++q)
-        add(m_stiff_pairs[m_stiff_in[q]].b, m_stiff_pairs[m_stiff_in[q]]);
-      Matrix12d& block = blocks[s];
-      double upper[10][6] = {};  // (u, v ≥ u) in order, each a symmetric 3×3
-      bool any = false;
-      for (int a = 0; a < points; ++a) {
-        if (!used[a]) continue;
-        any = true;
-        const std::array<double, 4>& b = m_basis[a];
-        const std::array<double, 6>& m = S[a];
-        int uv = 0;
-        for (int u = 0; u < 4; ++u)
-          for (int v = u; v < 4; ++v, ++uv) {
-            const double w = b[u] * b[v];
-            for (int e = 0; e < 6; ++e) upper[uv][e] += w * m[e];
-          }
-      }
-      if (!any) continue;
-      int uv = 0;
-      for (int u = 0; u < 4; ++u)
-        for (int v = u; v < 4; ++v, ++uv) {
-          const double* m = upper[uv];
-          Eigen::Matrix3d sym;
-          sym << m[0], m[1], m[2], m[1], m[3], m[4], m[2], m[4], m[5];
-          block.block<3, 3>(3 * u, 3 * v) += sym;
-          if (v != u) block.block<3, 3>(3 * v, 3 * u) += sym;
-        }
+  std::array<std::array<double, 6>, MAX_CONTACT_POINTS> S;
+  std::array<char, MAX_CONTACT_POINTS> used{};
+  auto add = [&](int a, const StiffPair& p) {
+    std::array<double, 6>& m = S[a];
+    if (!used[a]) {
+      m.fill(0.0);
+      used[a] = 1;
     }
-  });
+    const double kn = p.k - p.kt;
+    const double x = kn * p.nx, y = kn * p.ny, z = kn * p.nz;
+    m[0] += x * p.nx + p.kt;
+    m[1] += x * p.ny;
+    m[2] += x * p.nz;
+    m[3] += y * p.ny + p.kt;
+    m[4] += y * p.nz;
+    m[5] += z * p.nz + p.kt;
+  };
+  for (int k = m_stiff_offset[s]; k < m_stiff_offset[s + 1]; ++k)
+    add(m_stiff_pairs[k].a, m_stiff_pairs[k]);
+  for (int q = m_stiff_in_offset[s]; q < m_stiff_in_offset[s + 1]; ++q)
+    add(m_stiff_pairs[m_stiff_in[q]].b, m_stiff_pairs[m_stiff_in[q]]);
+  double upper[10][6] = {};  // (u, v ≥ u) in order, each a symmetric 3×3
+  for (int a = 0; a < m_points; ++a) {
+    if (!used[a]) continue;
+    const std::array<double, 4>& b = m_basis[a];
+    const std::array<double, 6>& m = S[a];
+    int uv = 0;
+    for (int u = 0; u < 4; ++u)
+      for (int v = u; v < 4; ++v, ++uv) {
+        const double w = b[u] * b[v];
+        for (int e = 0; e < 6; ++e) upper[uv][e] += w * m[e];
+      }
+  }
+  int uv = 0;
+  for (int u = 0; u < 4; ++u)
+    for (int v = u; v < 4; ++v, ++uv) {
+      const double* m = upper[uv];
+      Eigen::Matrix3d sym;
+      sym << m[0], m[1], m[2], m[1], m[3], m[4], m[2], m[4], m[5];
+      block.block<3, 3>(3 * u, 3 * v) += sym;
+      if (v != u) block.block<3, 3>(3 * v, 3 * u) += sym;
+    }
+  return true;
 }
 
 void ContactTerm::record(StepData& data) const {

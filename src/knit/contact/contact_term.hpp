@@ -146,6 +146,7 @@ class ContactTerm : public Term {
   /// H = k n̂n̂ᵀ + kt (I − n̂n̂ᵀ): the operator without its coupling of i to j.
   void add_operator_segment_stiffness(const Model& model,
                                       std::vector<Matrix12d>& blocks) const override;
+  bool add_operator_segment_block(const Model& model, int segment, Matrix12d& block) const override;
 
   /// When on, each evaluation records its point pairs in contact (slow; for tests).
   void set_record_point_pairs(bool on) { m_record = on; }
@@ -160,6 +161,7 @@ class ContactTerm : public Term {
     double min_d2 = 0;             // smallest squared distance of a point pair in contact (cm²)
     Eigen::Vector3d delta;         // y_j − y_i at that point pair (cm)
     int point_a = 0, point_b = 0;  // its contact points on i and on j
+    int stiff_begin = 0, stiff_end = 0;  // its point pairs in m_row_stiff[i] (m_stiffness)
   };
   // a point pair in contact of row i's segment pair (i, j): its points, its normal, its
   // normal stiffness k = c f''(d)/(2r)² and its transverse one kt = c |f'(d)|/(2r |Δ|)
@@ -225,7 +227,7 @@ class ContactTerm : public Term {
   // ascending order (rows k < s in ascending k) at [m_stiff_in_offset[s], …[s + 1]): the
   // operator's products visit them in this fixed order, from contiguous memory
   std::vector<StiffPair> m_stiff_pairs;
-  std::vector<int> m_stiff_offset, m_stiff_in_offset, m_stiff_in, m_stiff_fill;
+  std::vector<int> m_stiff_offset, m_stiff_in_offset, m_stiff_in;
   mutable std::vector<Eigen::Vector3d> m_stiff_product;  // per point pair: H (J x) (dyn)
   std::vector<RowStats> m_rows;
   std::vector<std::vector<ContactPointPair>> m_row_records;

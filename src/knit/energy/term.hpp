@@ -56,6 +56,11 @@ class Term {
   /// on segment i's own four control points (the preconditioner of the solve).
   virtual void add_operator_segment_stiffness(const Model& model,
                                               std::vector<Matrix12d>& blocks) const {}
+  /// The same for one segment: adds its block into `block`; false (and nothing added)
+  /// where that part is zero. Safe to call for different segments at once.
+  virtual bool add_operator_segment_block(const Model& model, int segment, Matrix12d& block) const {
+    return false;
+  }
   /// Potential energy alone (erg) at `time`.
   virtual double energy(const Model& model, const Eigen::VectorXd& q, double time) {
     Eigen::VectorXd f = Eigen::VectorXd::Zero(q.size());

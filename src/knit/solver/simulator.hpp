@@ -194,7 +194,6 @@ class Simulator {
   static constexpr double CG_TOLERANCE = 1e-3;
   bool m_has_operator_terms = false;
   Eigen::VectorXd m_cg_r, m_cg_z, m_cg_p, m_cg_ap, m_cg_kp, m_cg_kx;
-  std::vector<Matrix12d> m_precond_blocks;  // m_blocks with the operators' segment parts
 };
 
 /// The default terms for a model's parameters (see Simulator(Model)).

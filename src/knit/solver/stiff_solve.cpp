@@ -1,5 +1,7 @@
 #include "knit/solver/stiff_solve.hpp"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 
@@ -11,15 +13,45 @@ constexpr int W = StiffSolver::BAND + 1;  // stored entries per column
 
 bool StiffSolver::factor(const Model& model, const std::vector<Matrix12d>& blocks, double h2,
                          const std::vector<int>& fixed) {
+  return factor(model, blocks, h2, fixed, ExtraBlock{});
+}
+
+bool StiffSolver::factor(const Model& model, const std::vector<Matrix12d>& blocks, double h2,
+                         const std::vector<int>& fixed, const ExtraBlock& extra) {
   m_n = model.num_dof();
   m_band.assign(static_cast<size_t>(m_n) * W, 0.0);
   double* a = m_band.data();
   for (int d = 0; d < m_n; ++d) a[d * W] = model.mass[d / 3];
-  for (int i = 0; i < model.num_seg(); ++i) {
-    const Matrix12d& b = blocks[i];
+  auto add_block = [&](int i, const Matrix12d& b) {
     const int base = 3 * model.seg_cp[i];
     for (int c = 0; c < 12; ++c)
       for (int r = c; r < 12; ++r) a[(base + c) * W + (r - c)] += h2 * b(r, c);
+  };
+  const int n_seg = model.num_seg();
+  bool ascending = true;  // each segment's first control point after the one before's
+  for (int i = 1; i < n_seg && ascending; ++i) ascending = model.seg_cp[i] > model.seg_cp[i - 1];
+  if (!extra || !ascending) {
+    for (int i = 0; i < n_seg; ++i) {
+      if (!extra) {
+        add_block(i, blocks[i]);
+        continue;
+      }
+      Matrix12d b = blocks[i];
+      extra(i, b);
+      add_block(i, b);
+    }
+  } else {
+    // segments i and i + 4 cover disjoint coordinates: each set writes disjoint columns
+    for (int set = 0; set < 4; ++set)
+      tbb::parallel_for(tbb::blocked_range<int>(0, (n_seg - set + 3) / 4, 64),
+                        [&](const tbb::blocked_range<int>& r) {
+                          for (int k = r.begin(); k < r.end(); ++k) {
+                            const int i = set + 4 * k;
+                            Matrix12d b = blocks[i];
+                            extra(i, b);
+                            add_block(i, b);
+                          }
+                        });
   }
   // the fixed coordinates: their couplings to the free ones kept for solve, then their
   // rows and columns replaced by the identity's

@@ -9,6 +9,7 @@
 // general sparse Cholesky (Eigen has no band solver; this one is tested against Eigen's
 // dense LLT).
 #include <Eigen/Core>
+#include <functional>
 #include <vector>
 
 #include "knit/model/model.hpp"
@@ -28,6 +29,13 @@ class StiffSolver {
   /// in solve) and replaced by the identity.
   bool factor(const Model& model, const std::vector<Matrix12d>& blocks, double h2,
               const std::vector<int>& fixed = {});
+  /// The same with `extra(i, block)` adding more to segment i's block as it is assembled
+  /// (the preconditioner's share of terms applied as operators), called for different
+  /// segments at once; the blocks are then summed in parallel, four interleaved sets of
+  /// segments one after another (segments four apart share no coordinate).
+  using ExtraBlock = std::function<void(int, Matrix12d&)>;
+  bool factor(const Model& model, const std::vector<Matrix12d>& blocks, double h2,
+              const std::vector<int>& fixed, const ExtraBlock& extra);
   /// Solves the factored system for `rhs` (size 3 × control points) into x. At a fixed
   /// coordinate rhs holds its given value, which x then has.
   void solve(const Eigen::VectorXd& rhs, Eigen::VectorXd& x) const;
