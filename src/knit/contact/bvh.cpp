@@ -25,6 +25,7 @@ int Bvh::build_range(std::vector<int>& order, std::vector<Eigen::Vector3d>& cent
   m_nodes.emplace_back();
   if (end - begin == 1) {
     m_nodes[index].leaf = order[begin];
+    m_nodes[index].max_leaf = order[begin];
     return index;
   }
   // split at the median of the box centres along their longest extent; ties broken by
@@ -42,6 +43,7 @@ int Bvh::build_range(std::vector<int>& order, std::vector<Eigen::Vector3d>& cent
   build_range(order, centres, begin, mid);
   const int right = build_range(order, centres, mid, end);
   m_nodes[index].right = right;
+  m_nodes[index].max_leaf = std::max(m_nodes[index + 1].max_leaf, m_nodes[right].max_leaf);
   return index;
 }
 

@@ -55,15 +55,18 @@ class Bvh {
   int num_nodes() const { return static_cast<int>(m_nodes.size()); }
 
   /// Calls on_leaf(leaf index) for every leaf whose box overlaps `box`, in a fixed order
-  /// (depth first, left before right). Returns the number of node boxes tested.
+  /// (depth first, left before right). Returns the number of node boxes tested. With
+  /// `after` ≥ 0, only leaves with a larger index: a subtree whose leaves all come at or
+  /// before it is skipped untested (each pair found once, from its lower leaf).
   template <class F>
-  long long query(const Aabb& box, F&& on_leaf) const;
+  long long query(const Aabb& box, F&& on_leaf, int after = -1) const;
 
  private:
   struct Node {
     Aabb box;
-    int right = -1;  ///< index of the right child (the left one is this index + 1)
-    int leaf = -1;   ///< leaf index, or −1 for an inner node
+    int right = -1;     ///< index of the right child (the left one is this index + 1)
+    int leaf = -1;      ///< leaf index, or −1 for an inner node
+    int max_leaf = -1;  ///< the largest leaf index in the subtree
   };
   int build_range(std::vector<int>& order, std::vector<Eigen::Vector3d>& centres, int begin,
                   int end);
@@ -73,7 +76,7 @@ class Bvh {
 };
 
 template <class F>
-long long Bvh::query(const Aabb& box, F&& on_leaf) const {
+long long Bvh::query(const Aabb& box, F&& on_leaf, int after) const {
   if (m_nodes.empty()) return 0;
   // the tree is balanced (median splits), so its depth is ≈ log2(n) + 1
   constexpr int MAX_DEPTH = 96;
@@ -84,6 +87,7 @@ long long Bvh::query(const Aabb& box, F&& on_leaf) const {
   while (top > 0) {
     const int k = stack[--top];
     const Node& node = m_nodes[k];
+    if (node.max_leaf <= after) continue;
     ++tests;
     if (!node.box.overlaps(box)) continue;
     if (node.leaf >= 0) {

@@ -401,9 +401,13 @@ double ContactTerm::add_force_bvh(const Model& model, const Eigen::VectorXd& q,
       for (int i = range.begin(); i < range.end(); ++i) {
         std::vector<int>& partners = m_partners[i];
         partners.clear();
-        m_list_box_tests[i] = m_bvh.query(m_list_boxes[i], [&](int j) {
-          if (j != i && !model.neighbours(i, j)) partners.push_back(j);
-        });
+        // the partners after i alone: row i owns the pairs (i, j > i)
+        m_list_box_tests[i] = m_bvh.query(
+            m_list_boxes[i],
+            [&](int j) {
+              if (!model.neighbours(i, j)) partners.push_back(j);
+            },
+            i);
         std::sort(partners.begin(), partners.end());
         // headroom, so that later rebuilds rarely allocate
         if (partners.capacity() < partners.size() + partners.size() / 4)
