@@ -530,47 +530,57 @@ void ContactTerm::set_operator_stiffness(bool on) {
   }
 }
 
+Eigen::Vector3d ContactTerm::pair_product(const StiffPair& p, const double* xi,
+                                          const double* xj) const {
+  // f = k n̂ (n̂·u) + kt (u − n̂ (n̂·u)), u = J x the change of Δ = y_j(t_b) − y_i(t_a)
+  const std::array<double, 4>& ba = m_basis[p.a];
+  const std::array<double, 4>& bb = m_basis[p.b];
+  double u[3] = {0, 0, 0};
+  for (int c = 0; c < 4; ++c)
+    for (int d = 0; d < 3; ++d) u[d] += bb[c] * xj[3 * c + d] - ba[c] * xi[3 * c + d];
+  const Eigen::Vector3d uv(u[0], u[1], u[2]), n(p.nx, p.ny, p.nz);
+  const double un = n.dot(uv);
+  return (p.k - p.kt) * un * n + p.kt * uv;
+}
+
+template <class Force>
+void ContactTerm::segment_product(int s, Force&& force, Vector12d& slot) const {
+  // K x puts B_b f on j's control points and −B_a f on i's
+  for (int k = m_stiff_offset[s]; k < m_stiff_offset[s + 1]; ++k) {
+    const Eigen::Vector3d f = force(k);
+    const std::array<double, 4>& ba = m_basis[m_stiff_pairs[k].a];
+    for (int c = 0; c < 4; ++c) slot.segment<3>(3 * c) -= ba[c] * f;
+  }
+  for (int q = m_stiff_in_offset[s]; q < m_stiff_in_offset[s + 1]; ++q) {
+    const int k = m_stiff_in[q];
+    const Eigen::Vector3d f = force(k);
+    const std::array<double, 4>& bb = m_basis[m_stiff_pairs[k].b];
+    for (int c = 0; c < 4; ++c) slot.segment<3>(3 * c) += bb[c] * f;
+  }
+}
+
 void ContactTerm::add_stiffness_product(const Model& model, const Eigen::VectorXd& x,
                                         Eigen::VectorXd& y) const {
   if (!m_stiffness) return;
   const int rows = std::min<int>(m_num_seg, static_cast<int>(m_stiff_offset.size()) - 1);
   if (rows <= 0) return;  // no evaluation yet
   m_stiff_product.resize(m_stiff_pairs.size());
-  // per point pair: f = k n̂ (n̂·u) + kt (u − n̂ (n̂·u)), u = J x the change of
-  // Δ = y_j(t_b) − y_i(t_a); K x puts B_b f on j's control points and −B_a f on i's
+  // per point pair its force (pair_product), then per segment their sum (segment_product)
   tbb::parallel_for(tbb::blocked_range<int>(0, rows, 16), [&](const tbb::blocked_range<int>& r) {
     for (int i = r.begin(); i < r.end(); ++i) {
       const double* xi = x.data() + 3 * model.seg_cp[i];
       for (int k = m_stiff_offset[i]; k < m_stiff_offset[i + 1]; ++k) {
         const StiffPair& p = m_stiff_pairs[k];
-        const double* xj = x.data() + 3 * model.seg_cp[p.j];
-        const std::array<double, 4>& ba = m_basis[p.a];
-        const std::array<double, 4>& bb = m_basis[p.b];
-        double u[3] = {0, 0, 0};
-        for (int c = 0; c < 4; ++c)
-          for (int d = 0; d < 3; ++d) u[d] += bb[c] * xj[3 * c + d] - ba[c] * xi[3 * c + d];
-        const Eigen::Vector3d uv(u[0], u[1], u[2]), n(p.nx, p.ny, p.nz);
-        const double un = n.dot(uv);
-        m_stiff_product[k] = (p.k - p.kt) * un * n + p.kt * uv;
+        m_stiff_product[k] = pair_product(p, xi, x.data() + 3 * model.seg_cp[p.j]);
       }
     }
   });
   // per segment, in a fixed order: its own row's pairs (it is i), then the pairs of rows
   // k < s that have it as j, in ascending k
   m_product_accumulator.run(model, [&](int s, Vector12d& slot) {
-    if (s >= rows) return 0.0;
-    auto force = [&](int k) -> const Eigen::Vector3d& { return m_stiff_product[k]; };
-    for (int k = m_stiff_offset[s]; k < m_stiff_offset[s + 1]; ++k) {
-      const Eigen::Vector3d f = force(k);
-      const std::array<double, 4>& ba = m_basis[m_stiff_pairs[k].a];
-      for (int c = 0; c < 4; ++c) slot.segment<3>(3 * c) -= ba[c] * f;
-    }
-    for (int q = m_stiff_in_offset[s]; q < m_stiff_in_offset[s + 1]; ++q) {
-      const int k = m_stiff_in[q];
-      const Eigen::Vector3d f = force(k);
-      const std::array<double, 4>& bb = m_basis[m_stiff_pairs[k].b];
-      for (int c = 0; c < 4; ++c) slot.segment<3>(3 * c) += bb[c] * f;
-    }
+    if (s < rows)
+      segment_product(
+          s, [&](int k) { return m_stiff_product[k]; }, slot);
     return 0.0;
   });
   m_product_accumulator.gather(model, y, 1.0);
@@ -582,18 +592,7 @@ void ContactTerm::add_stiffness_product_rows(const Model& model, const Eigen::Ve
   if (!m_stiffness) return;
   const int rows = std::min<int>(m_num_seg, static_cast<int>(m_stiff_offset.size()) - 1);
   if (rows <= 0) return;
-  // as add_stiffness_product, each listed segment's pairs taken afresh (a few segments)
-  auto pair_force = [&](const StiffPair& p, int i) {
-    const double* xi = x.data() + 3 * model.seg_cp[i];
-    const double* xj = x.data() + 3 * model.seg_cp[p.j];
-    const std::array<double, 4>& ba = m_basis[p.a];
-    const std::array<double, 4>& bb = m_basis[p.b];
-    Eigen::Vector3d u = Eigen::Vector3d::Zero();
-    for (int c = 0; c < 4; ++c)
-      for (int d = 0; d < 3; ++d) u[d] += bb[c] * xj[3 * c + d] - ba[c] * xi[3 * c + d];
-    const Eigen::Vector3d n(p.nx, p.ny, p.nz);
-    return Eigen::Vector3d((p.k - p.kt) * n.dot(u) * n + p.kt * u);
-  };
+  // as add_stiffness_product, each listed segment's pairs taken afresh (a few segments);
   // the row (segment i) that owns pair k: the last i with m_stiff_offset[i] <= k
   auto owner = [&](int k) {
     return static_cast<int>(
@@ -601,20 +600,14 @@ void ContactTerm::add_stiffness_product_rows(const Model& model, const Eigen::Ve
                m_stiff_offset.begin()) -
            1;
   };
+  auto force = [&](int k) {
+    const StiffPair& p = m_stiff_pairs[k];
+    return pair_product(p, x.data() + 3 * model.seg_cp[owner(k)], x.data() + 3 * model.seg_cp[p.j]);
+  };
   for (int s : segments) {
     if (s >= rows) continue;
     Vector12d slot = Vector12d::Zero();
-    for (int k = m_stiff_offset[s]; k < m_stiff_offset[s + 1]; ++k) {
-      const Eigen::Vector3d f = pair_force(m_stiff_pairs[k], s);
-      const std::array<double, 4>& ba = m_basis[m_stiff_pairs[k].a];
-      for (int c = 0; c < 4; ++c) slot.segment<3>(3 * c) -= ba[c] * f;
-    }
-    for (int q = m_stiff_in_offset[s]; q < m_stiff_in_offset[s + 1]; ++q) {
-      const int k = m_stiff_in[q];
-      const Eigen::Vector3d f = pair_force(m_stiff_pairs[k], owner(k));
-      const std::array<double, 4>& bb = m_basis[m_stiff_pairs[k].b];
-      for (int c = 0; c < 4; ++c) slot.segment<3>(3 * c) += bb[c] * f;
-    }
+    segment_product(s, force, slot);
     y.segment<12>(3 * model.seg_cp[s]) += slot;
   }
 }

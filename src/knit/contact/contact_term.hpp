@@ -180,6 +180,13 @@ class ContactTerm : public Term {
   void resize(const Model& model);
   // m_incoming from the kernels' pairs (rows 0 … n − 1)
   void index_incoming_pairs(int n);
+  // the stiffness product's force of point pair p, H (J x), from x at its segments' control
+  // points xi (segment i's, the row that owns p) and xj
+  Eigen::Vector3d pair_product(const StiffPair& p, const double* xi, const double* xj) const;
+  // segment s's 12 entries of K x from each point pair's force(k): its own row's pairs
+  // (it is i), then the pairs of rows k < s that have it as j, in ascending k
+  template <class Force>
+  void segment_product(int s, Force&& force, Vector12d& slot) const;
   void tabulate_points(const Model& model, const Eigen::VectorXd& q, const Eigen::VectorXd& v);
   template <bool DAMP>
   void pair_kernel(const Model& model, int i, int j, RowStats& row);

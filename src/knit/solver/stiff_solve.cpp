@@ -30,12 +30,10 @@ bool StiffSolver::factor(const Model& model, const std::vector<Matrix12d>& block
   const int n_seg = model.num_seg();
   bool ascending = true;  // each segment's first control point after the one before's
   for (int i = 1; i < n_seg && ascending; ++i) ascending = model.seg_cp[i] > model.seg_cp[i - 1];
-  if (!extra || !ascending) {
+  if (!extra) {
+    for (int i = 0; i < n_seg; ++i) add_block(i, blocks[i]);
+  } else if (!ascending) {
     for (int i = 0; i < n_seg; ++i) {
-      if (!extra) {
-        add_block(i, blocks[i]);
-        continue;
-      }
       Matrix12d b = blocks[i];
       extra(i, b);
       add_block(i, b);
