@@ -14,7 +14,10 @@
 //                          [--runs explicit:2e-4,imex:4e-4,...] [--reference explicit:H]
 //                          [--threads N] [--end-mass-floor F]
 // A run named INTEGRATOR+bending:H takes the bending energy implicitly too
-// (SolverSettings::implicit_bending), e.g. imex-contact+bending:3.2e-3.
+// (SolverSettings::implicit_bending), e.g. imex-contact+bending:3.2e-3; imex-contact+cg:H
+// (also imex-contact+bending+cg:H) solves the whole linear system by conjugate gradients
+// to 1e-3 of its right-hand side (SolverSettings::contact_solve_tolerance) instead of once
+// with the band factor.
 // --end-mass-floor: each yarn end's two control points get at least F of an interior one's
 // mass (the scene key end_mass_floor): the large steps of imex-contact otherwise fail first
 // at the light ends.
@@ -33,18 +36,26 @@ struct Spec {
   double h;
   std::string text;
   bool implicit_bending = false;
+  double contact_solve_tolerance = 0;
 };
 
 Spec parse_spec(const std::string& text) {
   const size_t colon = text.find(':');
   if (colon == std::string::npos)
-    throw std::invalid_argument("'" + text + "': expected INTEGRATOR[+bending]:H (e.g. imex:4e-4)");
+    throw std::invalid_argument("'" + text +
+                                "': expected INTEGRATOR[+bending][+cg]:H (e.g. imex:4e-4)");
   std::string name = text.substr(0, colon);
-  const std::string suffix = "+bending";
-  const bool bending = name.size() > suffix.size() &&
-                       name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0;
-  if (bending) name.resize(name.size() - suffix.size());
-  return {knit::parse_integrator(name), std::stod(text.substr(colon + 1)), text, bending};
+  // strips `suffix` from the end of name, saying whether it was there
+  auto strip = [&](const std::string& suffix) {
+    const bool has = name.size() > suffix.size() &&
+                     name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0;
+    if (has) name.resize(name.size() - suffix.size());
+    return has;
+  };
+  const bool cg = strip("+cg");
+  const bool bending = strip("+bending");
+  return {knit::parse_integrator(name), std::stod(text.substr(colon + 1)), text, bending,
+          cg ? 1e-3 : 0.0};
 }
 
 struct Outcome {
@@ -75,6 +86,7 @@ Outcome run(const knit::Scene& base, const Spec& spec, double duration) {
   scene.model.params.solver.time_step = spec.h;
   scene.model.params.solver.integrator = spec.integrator;
   scene.model.params.solver.implicit_bending = spec.implicit_bending;
+  scene.model.params.solver.contact_solve_tolerance = spec.contact_solve_tolerance;
   auto sim = knit::make_scene_simulator(scene);
   Outcome o;
   o.state = scene.state;
@@ -151,6 +163,7 @@ int main(int argc, char** argv) {
     }
     nlohmann::json j = {{"integrator", knit::integrator_name(spec.integrator)},
                         {"implicit_bending", spec.implicit_bending},
+                        {"contact_solve_tolerance", spec.contact_solve_tolerance},
                         {"h", spec.h},
                         {"reference", k == 0},
                         {"stable", o.stable},

@@ -38,6 +38,36 @@ TEST(Inextensibility, GradientMatchesFiniteDifferences) {
   EXPECT_NEAR(length_constraint(x, segment_arclength(x, q), q, nullptr), 0.0, 1e-15);
 }
 
+// length_constraints takes four segments at a time, one per SIMD lane: each lane must give
+// what the one-segment formula gives (the same operations; only the compiler's fused
+// multiply-adds may round differently), for every segment, a listed subset, and a last
+// partial group of lanes.
+TEST(Inextensibility, LanesMatchTheOneSegmentFormula) {
+  ModelBuilder b;
+  b.add_yarn(wavy(31));
+  b.add_yarn(wavy(20, 1.0).colwise() + Eigen::Vector3d(0, 2, 0));
+  const Model m = b.build(Params{});
+  const Eigen::VectorXd q = test::jitter(b.positions(), 0.05, 3);
+  for (const std::vector<int>& segments : {std::vector<int>{}, std::vector<int>{4, 0, 31, 7, 19}}) {
+    const int rows = segments.empty() ? m.num_seg() : static_cast<int>(segments.size());
+    ASSERT_NE(rows % 4, 0) << "a partial group of lanes is part of the test";
+    std::vector<double> c(rows), grad(12 * rows), c_only(rows);
+    length_constraints(m, q, segments, rows, c.data(), grad.data());
+    length_constraints(m, q, segments, rows, c_only.data(), nullptr);
+    for (int row = 0; row < rows; ++row) {
+      const int i = segments.empty() ? row : segments[row];
+      Vector12d g;
+      const double want =
+          length_constraint(gather_segment(q, m.seg_cp[i]), m.rest_length[i], m.quad, &g);
+      EXPECT_NEAR(c[row], want, 1e-15) << "row " << row;
+      EXPECT_EQ(c_only[row], c[row]) << "row " << row;
+      for (int k = 0; k < 12; ++k)
+        EXPECT_NEAR(grad[12 * row + k], g[k], 1e-13 * std::max(1.0, std::abs(g[k])))
+            << "row " << row << ", coordinate " << k;
+    }
+  }
+}
+
 TEST(Projection, ConvergesFromPerturbedStateWithinFiveIterations) {
   ModelBuilder b;
   b.add_yarn(wavy(30));

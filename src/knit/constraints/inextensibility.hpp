@@ -14,6 +14,13 @@ namespace knit {
 double length_constraint(const Vector12d& x, double rest_length, const QuadratureTable& quad,
                          Vector12d* grad);
 
+/// C_i of `rows` segments at q, in parallel and four at a time (one per SIMD lane, the same
+/// formula as length_constraint): segment `segments[row]` for each row, or segment `row`
+/// when `segments` is empty. Writes c[row] and, when `grad` is non-null, ∂C_i/∂x of the
+/// segment's 12 control-point coordinates at grad[12·row … 12·row + 11].
+void length_constraints(const Model& model, const Eigen::VectorXd& q,
+                        const std::vector<int>& segments, int rows, double* c, double* grad);
+
 /// The segments' C_i as one group ("length"): every segment (row i = segment i), or the
 /// given ones in order. Its rows exert no net force or torque on a yarn (arclength is
 /// invariant under rigid motion).

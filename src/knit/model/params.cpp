@@ -25,6 +25,7 @@ const std::vector<ParamRange>& param_ranges() {
       {"contact_points", 1, 64, "points per segment"},
       {"end_mass_floor", 0, 1, "of an interior control point's mass"},
       {"time_step", 1e-8, 1e-2, "s"},
+      {"contact_solve_tolerance", 0, 1, ""},
       {"constraint_tolerance", 1e-12, 1, ""},
       {"max_projection_iterations", 1, 10000, ""},
   };
@@ -85,6 +86,7 @@ void validate_params(const Params& p) {
   check_param("contact_points", p.discretisation.contact_points);
   check_param("end_mass_floor", p.discretisation.end_mass_floor);
   check_param("time_step", p.solver.time_step);
+  check_param("contact_solve_tolerance", p.solver.contact_solve_tolerance);
   check_param("constraint_tolerance", p.solver.constraint_tolerance);
   check_param("max_projection_iterations", p.solver.max_projection_iterations);
   for (int c = 0; c < 3; ++c)

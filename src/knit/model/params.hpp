@@ -73,6 +73,12 @@ struct SolverSettings {
   /// positive semidefinite, bending_hessian, in the band solve): explicit bending bounds
   /// imex-contact's step (1.6e-3 s with k_bend = 5 on a 42×32 knit; 3.2e-3 s with it).
   bool implicit_bending = false;
+  /// With IMEX_CONTACT: 0 (the default) solves each step once with the band factor, which
+  /// holds the contact stiffness on each segment's own control points, and takes the
+  /// contact coupling between segments at the step's start velocity (−h² K_c v on the
+  /// right-hand side); > 0 solves the whole linear system by conjugate gradients until the
+  /// residual is this fraction of the right-hand side (docs/model.md §5.2).
+  double contact_solve_tolerance = 0;
   bool length_constraints = true;      ///< enforce C_i = 0 by projection (off in relaxation)
   double constraint_tolerance = 1e-6;  ///< projection stops when max |C| is below (C_len is
                                        ///< dimensionless, pin/glue/clamp rows in cm)

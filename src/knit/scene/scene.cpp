@@ -340,6 +340,7 @@ Params parse_params(const JsonReader& r, Params p) {
                 "length_constraints",
                 "contact",
                 "constraint_tolerance",
+                "contact_solve_tolerance",
                 "max_projection_iterations",
                 "time_step",
                 "integrator",
@@ -380,6 +381,8 @@ Params parse_params(const JsonReader& r, Params p) {
     p.solver.length_constraints = r.at("length_constraints").boolean();
   if (r.has("contact")) p.material.contact = r.at("contact").boolean();
   if (r.has("implicit_bending")) p.solver.implicit_bending = r.at("implicit_bending").boolean();
+  if (r.has("contact_solve_tolerance"))
+    p.solver.contact_solve_tolerance = r.at("contact_solve_tolerance").positive(true);
   if (r.has("constraint_tolerance"))
     p.solver.constraint_tolerance = r.at("constraint_tolerance").positive();
   if (r.has("max_projection_iterations"))

@@ -133,6 +133,7 @@ nlohmann::json params_json(const Params& p) {
            {{"time_step", p.solver.time_step},
             {"integrator", integrator_name(p.solver.integrator)},
             {"implicit_bending", p.solver.implicit_bending},
+            {"contact_solve_tolerance", p.solver.contact_solve_tolerance},
             {"length_constraints", p.solver.length_constraints},
             {"constraint_tolerance", p.solver.constraint_tolerance},
             {"max_projection_iterations", p.solver.max_projection_iterations}}},
