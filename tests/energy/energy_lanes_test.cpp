@@ -130,6 +130,37 @@ TEST(EnergyLanes, AssembledTermsMatchPlainAssembly) {
   }
 }
 
+// the length term's stiffness blocks (four segments per lane kernel, a partial last group)
+// against length_hessian per segment; and the same with 1 and 2 threads, bit for bit
+TEST(EnergyLanes, LengthStiffnessBlocksMatchThePlainHessian) {
+  Eigen::Matrix3Xd cp(3, 14);  // 11 segments: groups of 4, 4 and 3
+  for (int k = 0; k < 14; ++k)
+    cp.col(k) = Eigen::Vector3d(0.3 * k, 0.2 * std::sin(0.9 * k), 0.1 * std::cos(1.3 * k));
+  ModelBuilder b;
+  b.add_yarn(cp);
+  b.add_yarn(cp.leftCols(6).colwise() + Eigen::Vector3d(0, 1, 0));  // 3 more segments
+  const Model m = b.build(Params{}, 0.95);
+  // stretched and compressed segments both: the projection drops only the compressed
+  // ones' transverse part
+  const Eigen::VectorXd q = test::jitter(b.positions(), 0.05, 8);
+  auto blocks_with = [&](int threads) {
+    tbb::global_control control(tbb::global_control::max_allowed_parallelism, threads);
+    std::vector<Matrix12d> blocks;
+    tbb::task_arena(threads).execute([&] { LengthEnergy().segment_stiffness(m, q, blocks); });
+    return blocks;
+  };
+  const std::vector<Matrix12d> blocks = blocks_with(2), one = blocks_with(1);
+  ASSERT_EQ(static_cast<int>(blocks.size()), m.num_seg());
+  for (int i = 0; i < m.num_seg(); ++i) {
+    const Matrix12d want =
+        length_hessian(gather_segment(q, m.seg_cp[i]), m.rest_length[i], m.params.material.k_len,
+                       m.quad, LengthHessian::PROJECTED);
+    EXPECT_LE((blocks[i] - want).cwiseAbs().maxCoeff(), 1e-12 * want.cwiseAbs().maxCoeff())
+        << "segment " << i;
+    EXPECT_TRUE(blocks[i] == one[i]) << "segment " << i << ": 1 and 2 threads differ";
+  }
+}
+
 // the assembled terms are bitwise independent of the thread count (per-segment slots, a
 // fixed summation order)
 TEST(EnergyLanes, AssembledTermsDoNotDependOnThreadCount) {
