@@ -96,9 +96,11 @@ void add_integrator_option(CLI::App* cmd, std::string& integrator) {
                   "explicit: explicit midpoint for every term (the reference); imex: the same "
                   "but the length energy taken by a linearly implicit Euler step, which lifts "
                   "the time-step limit its stiffness sets; imex-contact: yarn–yarn contact "
-                  "implicit too, which lifts the limit contact sets in simulation (a 42×32 "
-                  "knit hanging holds 1.6e-3 s, not 2e-3 s: watch the closest approach d; "
-                  "docs/model.md §5.2)")
+                  "implicit too (each segment's own contact stiffness in the solve, the "
+                  "coupling between segments at the step's start velocity unless the scene "
+                  "sets contact_solve_tolerance), which lifts the limit contact sets in "
+                  "simulation (a 42×32 knit hanging holds 1.6e-3 s, not 2e-3 s: watch the "
+                  "closest approach d; docs/model.md §5.2)")
       ->check(CLI::IsMember(knit::integrator_names()));
 }
 
