@@ -97,15 +97,21 @@ TEST(EnergyLanes, LengthLanesMatchPlainKernel) {
                            "length");
 }
 
-// the assembled terms (lane kernels, a partial last group of four) against a plain
-// per-segment assembly with the scalar kernels
-TEST(EnergyLanes, AssembledTermsMatchPlainAssembly) {
-  Eigen::Matrix3Xd cp(3, 14);  // 11 segments: groups of 4, 4 and 3
+// two yarns, 11 and 3 segments: 14 in all, in groups of four lanes 4, 4, 4 and a partial 2
+ModelBuilder two_wavy_yarns() {
+  Eigen::Matrix3Xd cp(3, 14);
   for (int k = 0; k < 14; ++k)
     cp.col(k) = Eigen::Vector3d(0.3 * k, 0.2 * std::sin(0.9 * k), 0.1 * std::cos(1.3 * k));
   ModelBuilder b;
   b.add_yarn(cp);
-  b.add_yarn(cp.leftCols(6).colwise() + Eigen::Vector3d(0, 1, 0));  // 3 more segments
+  b.add_yarn(cp.leftCols(6).colwise() + Eigen::Vector3d(0, 1, 0));
+  return b;
+}
+
+// the assembled terms (lane kernels, a partial last group of four) against a plain
+// per-segment assembly with the scalar kernels
+TEST(EnergyLanes, AssembledTermsMatchPlainAssembly) {
+  ModelBuilder b = two_wavy_yarns();
   const Model m = b.build(Params{}, 0.95);
   const Eigen::VectorXd q = test::jitter(b.positions(), 0.02, 8);
   const Eigen::VectorXd v = Eigen::VectorXd::Zero(q.size());
@@ -133,12 +139,7 @@ TEST(EnergyLanes, AssembledTermsMatchPlainAssembly) {
 // the length term's stiffness blocks (four segments per lane kernel, a partial last group)
 // against length_hessian per segment; and the same with 1 and 2 threads, bit for bit
 TEST(EnergyLanes, LengthStiffnessBlocksMatchThePlainHessian) {
-  Eigen::Matrix3Xd cp(3, 14);  // 11 segments: groups of 4, 4 and 3
-  for (int k = 0; k < 14; ++k)
-    cp.col(k) = Eigen::Vector3d(0.3 * k, 0.2 * std::sin(0.9 * k), 0.1 * std::cos(1.3 * k));
-  ModelBuilder b;
-  b.add_yarn(cp);
-  b.add_yarn(cp.leftCols(6).colwise() + Eigen::Vector3d(0, 1, 0));  // 3 more segments
+  ModelBuilder b = two_wavy_yarns();
   const Model m = b.build(Params{}, 0.95);
   // stretched and compressed segments both: the projection drops only the compressed
   // ones' transverse part
