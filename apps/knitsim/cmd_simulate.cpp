@@ -18,7 +18,7 @@ void register_simulate(CLI::App& app) {
     double duration = 0;
     bool quiet = false, overwrite = false, implicit_bending = false;
     std::string export_format, integrator;
-    double time_step = 0;
+    double time_step = 0, contact_solve_tolerance = 0;
     int output_every = 0;
   };
   auto opts = std::make_shared<Opts>();
@@ -42,6 +42,14 @@ void register_simulate(CLI::App& app) {
       ->check(finite_range(knit::param_range("time_step").min, knit::param_range("time_step").max));
   add_integrator_option(cmd, opts->integrator);
   add_implicit_bending_option(cmd, opts->implicit_bending);
+  cmd->add_option("--contact-solve-tolerance", opts->contact_solve_tolerance,
+                  "with --integrator imex-contact: 0 (the default) solves each step once, "
+                  "contact's coupling between segments taken at the step's start velocity; "
+                  "> 0 solves the whole linear system by conjugate gradients until the "
+                  "residual is this fraction of its right-hand side (about twice the wall "
+                  "time; docs/model.md §5.2); overrides the scene's contact_solve_tolerance")
+      ->check(finite_range(knit::param_range("contact_solve_tolerance").min,
+                           knit::param_range("contact_solve_tolerance").max));
   cmd->add_option("--output-every", opts->output_every,
                   "override the scene's steps between written states and log rows")
       ->check(CLI::Range(1, 1'000'000'000));
@@ -55,6 +63,8 @@ void register_simulate(CLI::App& app) {
     if (cmd->count("--integrator"))
       scene.model.params.solver.integrator = knit::parse_integrator(opts->integrator);
     if (opts->implicit_bending) scene.model.params.solver.implicit_bending = true;
+    if (cmd->count("--contact-solve-tolerance"))
+      scene.model.params.solver.contact_solve_tolerance = opts->contact_solve_tolerance;
     if (cmd->count("--output-every")) scene.output_every = opts->output_every;
     if (cmd->count("--duration")) {
       knit::check_duration(opts->duration, scene.model.params.solver.time_step);

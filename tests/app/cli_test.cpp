@@ -84,6 +84,35 @@ TEST(Cli, SimulateTakesTheIntegratorTimeStepAndOutputIntervalAsked) {
   EXPECT_FALSE(fs::exists(bad_step_out)) << "output directory created for a refused step";
 }
 
+// --contact-solve-tolerance overrides the scene's: with it the imex-contact solve iterates
+// (the summary's implicit_solve), without it not; a value outside [0, 1] is refused by name
+// before anything is written.
+TEST(Cli, SimulateTakesTheContactSolveTolerance) {
+  auto simulate = [](const std::string& out, const std::string& extra) {
+    return run(std::string("simulate ") + KNIT_EXAMPLES + "/hanging_knit.json --out " + out +
+               " --duration 0.008 --time-step 4e-4 --integrator imex-contact --quiet" + extra);
+  };
+  const std::string out = temp_dir("cli_contact_cg");
+  const Result r = simulate(out, " --contact-solve-tolerance 1e-6");
+  ASSERT_EQ(r.code, 0) << r.output;
+  std::ifstream in(out + "/summary.json");
+  const auto s = nlohmann::json::parse(in);
+  EXPECT_EQ(s["params"]["solver"]["contact_solve_tolerance"], 1e-6);
+  ASSERT_TRUE(s.contains("implicit_solve")) << "the solve did not iterate";
+  EXPECT_GT(s["implicit_solve"]["iterations_mean"].get<double>(), 0.0);
+  const std::string lagged = temp_dir("cli_contact_lagged");
+  ASSERT_EQ(simulate(lagged, "").code, 0);
+  std::ifstream lagged_in(lagged + "/summary.json");
+  const auto l = nlohmann::json::parse(lagged_in);
+  EXPECT_EQ(l["params"]["solver"]["contact_solve_tolerance"], 0.0);
+  EXPECT_FALSE(l.contains("implicit_solve")) << "the lagged solve reports no iterations";
+  const std::string bad_out = temp_dir("cli_contact_cg_bad");
+  const Result bad = simulate(bad_out, " --contact-solve-tolerance 2");
+  EXPECT_NE(bad.code, 0);
+  EXPECT_NE(bad.output.find("--contact-solve-tolerance"), std::string::npos) << bad.output;
+  EXPECT_FALSE(fs::exists(bad_out)) << "output directory created for a refused tolerance";
+}
+
 TEST(Cli, UnstableRunStopsWithStatusAndKeepsLastGoodState) {
   const std::string scene = ::testing::TempDir() + "/cli_unstable.json";
   std::ofstream(scene) << R"({"yarns": [{"line": {"from": [0,0,0], "to": [5,0,0], "segments": 10}}],
