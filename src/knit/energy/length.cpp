@@ -110,7 +110,8 @@ Matrix12d length_hessian_from_sums(const double outer[10][6], const double iso[1
 }
 
 // Four segments' Hessians at once (out of line, so that each group's code is the same
-// wherever it falls in a thread's range: see length_constraints).
+// wherever it falls in a thread's range: see length_constraints in
+// constraints/inextensibility.cpp).
 [[gnu::noinline]] void length_hessian_lanes(const lanes::VecD x[12], lanes::VecD rest, double k_len,
                                             const QuadratureTable& quad, LengthHessian kind,
                                             lanes::VecD outer[10][6], lanes::VecD iso[10]) {
