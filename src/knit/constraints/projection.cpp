@@ -214,10 +214,10 @@ void FastProjection::record_groups(const Model& model, const Eigen::VectorXd& q,
 }
 
 double FastProjection::max_length_violation(const Model& model, const Eigen::VectorXd& q) {
+  std::vector<double> c(model.num_seg());
+  length_constraints(model, q, {}, model.num_seg(), c.data(), nullptr);
   double worst = 0;
-  for (int i = 0; i < model.num_seg(); ++i)
-    worst = std::max(worst, std::abs(length_constraint(gather_segment(q, model.seg_cp[i]),
-                                                       model.rest_length[i], model.quad, nullptr)));
+  for (double value : c) worst = std::max(worst, std::abs(value));
   return worst;
 }
 
