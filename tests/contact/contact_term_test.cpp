@@ -257,6 +257,60 @@ TEST(ContactTerm, KeptCandidateListGivesBitwiseTheSameForcesAsARebuild) {
   }
 }
 
+// Unless set, the margin adapts: along a fast drift that outruns the default margin every
+// evaluation it grows (and the list is kept for some evaluations), and once the knit is
+// still it shrinks back to the default; the forces stay bitwise those of a fresh term.
+TEST(ContactTerm, AdaptiveMarginGrowsWithFastMotionAndShrinksWhenStill) {
+  const Sample s0 = make(knit_like_sample(4, 5, 8, 0.125, 0.85));
+  const double r = 0.125;
+  ContactTerm adaptive(s0.model);
+  EXPECT_EQ(adaptive.candidate_margin(), ContactTerm::DEFAULT_MARGIN_RADII * r);
+  Sample s = s0;
+  const Eigen::VectorXd drift = random_vector(s.q.size(), 1.0, 78).cwiseSign();
+  auto evaluate = [&](const std::string& what) {
+    const Eigen::VectorXd v = random_vector(s.q.size(), 3.0, 400);
+    double e_adaptive = 0, e_fresh = 0;
+    const Eigen::VectorXd f_adaptive = force_of(adaptive, s, v, &e_adaptive);
+    ContactTerm fresh(s.model);
+    const Eigen::VectorXd f_fresh = force_of(fresh, s, v, &e_fresh);
+    ASSERT_EQ(e_adaptive, e_fresh) << what;
+    EXPECT_EQ(adaptive.last_stats().point_pairs_in_contact,
+              fresh.last_stats().point_pairs_in_contact)
+        << what;
+    for (int k = 0; k < f_adaptive.size(); ++k)
+      ASSERT_EQ(f_adaptive[k], f_fresh[k]) << what << ": " << dof_name(k);
+  };
+  // 0.4 r per axis per evaluation: more than the default δ/2 = 0.25 r
+  const long long before_fast = adaptive.candidate_rebuilds();
+  for (int step = 0; step < 24; ++step) {
+    evaluate("fast, step " + std::to_string(step));
+    s.q += 0.05 * drift;
+  }
+  const double grown = adaptive.candidate_margin();
+  EXPECT_GT(grown, ContactTerm::DEFAULT_MARGIN_RADII * r);
+  EXPECT_LE(grown, ContactTerm::MAX_ADAPTIVE_MARGIN_RADII * r * (1 + 1e-12));
+  EXPECT_LT(adaptive.candidate_rebuilds() - before_fast, 20) << "the grown margin kept the list";
+  // still: a tiny jitter, each evaluation near the last
+  for (int step = 0; step < 200; ++step) {
+    evaluate("still, step " + std::to_string(step));
+    s.q += random_vector(s.q.size(), 0.002, 500 + step);
+  }
+  EXPECT_LT(adaptive.candidate_margin(), grown);
+  EXPECT_EQ(adaptive.candidate_margin(), ContactTerm::DEFAULT_MARGIN_RADII * r);
+  // a margin that was set stays
+  ContactTerm fixed(s0.model);
+  fixed.set_candidate_margin(0.1 * r);
+  Eigen::VectorXd f = Eigen::VectorXd::Zero(s0.q.size());
+  Eigen::VectorXd q = s0.q;
+  for (int step = 0; step < 10; ++step) {
+    f.setZero();
+    fixed.add_force(s0.model, q, Eigen::VectorXd::Zero(q.size()), 0.0, f);
+    q += 0.05 * drift;
+  }
+  EXPECT_EQ(fixed.candidate_margin(), 0.1 * r);
+  EXPECT_EQ(fixed.candidate_rebuilds(), 10);
+}
+
 TEST(ContactTerm, RejectsANegativeCandidateMargin) {
   const Sample s = pressed_patch();
   ContactTerm term(s.model);

@@ -81,6 +81,7 @@ void ContactTerm::set_candidate_margin(double margin) {
     throw std::invalid_argument("contact candidate margin: expected a finite margin >= 0 cm, got " +
                                 std::to_string(margin));
   m_margin = margin;
+  m_margin_adaptive = false;
   m_list_valid = false;
 }
 
@@ -376,13 +377,29 @@ double ContactTerm::add_force_bvh(const Model& model, const Eigen::VectorXd& q,
 
   // candidate segment pairs, rebuilt only when some point moved more than δ/2 (see the
   // header: the reused list gives the same forces bitwise)
-  const double half_margin = 0.5 * m_margin;
-  const bool rebuild = !m_list_valid || m_list_model != &model ||
-                       m_list_radius != model.params.material.radius ||
-                       !(m_list_moved <= half_margin);
+  const double r = model.params.material.radius;
+  const bool moved_out = m_list_valid && !(m_list_moved <= 0.5 * m_list_margin);
+  const bool same_model = m_list_valid && m_list_model == &model && m_list_radius == r;
+  // the list's lifetime in evaluations, this one included
+  const long long lasted = m_evaluations - m_list_built_at;
+  // a grown margin that has outlived its need is shrunk at a rebuild of its own (the list
+  // is kept while nothing moves, and a wider list costs the kernels a box test per
+  // candidate)
+  const bool shrink = same_model && m_margin_adaptive && lasted > MAX_LIST_EVALUATIONS &&
+                      m_list_margin > DEFAULT_MARGIN_RADII * r;
+  const bool rebuild = !same_model || moved_out || shrink;
   m_stats.candidates_rebuilt = rebuild;
   m_rebuilds += rebuild;
+  if (same_model && m_margin_adaptive && (moved_out || shrink)) {
+    if (lasted < MIN_LIST_EVALUATIONS)
+      m_margin = std::min(1.5 * m_margin, MAX_ADAPTIVE_MARGIN_RADII * r);
+    else if (lasted > MAX_LIST_EVALUATIONS)
+      m_margin = std::max(m_margin / 1.5, DEFAULT_MARGIN_RADII * r);
+  }
+  const double half_margin = 0.5 * m_margin;
   if (rebuild) {
+    m_list_margin = m_margin;
+    m_list_built_at = m_evaluations;
     t = Clock::now();
     m_lx = m_px;
     m_ly = m_py;
@@ -448,7 +465,8 @@ double ContactTerm::add_force_bvh(const Model& model, const Eigen::VectorXd& q,
   index_incoming_pairs(n);
   const double energy = m_accumulator.run(model, [&](int s, Vector12d& slot) {
     for (const PairForce& pf : m_pairs[s]) slot += pf.force_i;
-    for (const Incoming& in : m_incoming[s]) slot += m_pairs[in.k][in.index].force_j;
+    for (int q = m_incoming_offset[s]; q < m_incoming_offset[s + 1]; ++q)
+      slot += m_pairs[m_incoming[q].k][m_incoming[q].index].force_j;
     return m_rows[s].energy;
   });
   m_accumulator.gather(model, force, 1.0);
@@ -471,47 +489,48 @@ double ContactTerm::add_force_bvh(const Model& model, const Eigen::VectorXd& q,
 }
 
 void ContactTerm::index_incoming_pairs(int n) {
-  m_incoming.resize(n);
-  for (auto& list : m_incoming) list.clear();
+  // a counting sort of the pairs (k, index) by their j, visited in ascending k: each
+  // segment's incoming pairs come out in ascending row
+  m_incoming_offset.assign(n + 1, 0);
+  for (int k = 0; k < n; ++k)
+    for (const PairForce& pf : m_pairs[k]) ++m_incoming_offset[pf.j + 1];
+  for (int s = 0; s < n; ++s) m_incoming_offset[s + 1] += m_incoming_offset[s];
+  m_incoming.resize(m_incoming_offset[n]);
+  m_incoming_fill.assign(m_incoming_offset.begin(), m_incoming_offset.end() - 1);
   for (int k = 0; k < n; ++k)
     for (int p = 0; p < static_cast<int>(m_pairs[k].size()); ++p)
-      m_incoming[m_pairs[k][p].j].push_back({k, p});
+      m_incoming[m_incoming_fill[m_pairs[k][p].j]++] = {k, p};
   if (!m_stiffness) return;
-  // the point pairs in one array, row by row
+  // the point pairs numbered row by row (they stay in the rows' arrays)
   m_stiff_offset.resize(n + 1);
   m_stiff_offset[0] = 0;
   for (int i = 0; i < n; ++i)
     m_stiff_offset[i + 1] = m_stiff_offset[i] + static_cast<int>(m_row_stiff[i].size());
-  const int total = m_stiff_offset[n];
-  m_stiff_pairs.resize(total);
-  tbb::parallel_for(tbb::blocked_range<int>(0, n, 256), [&](const tbb::blocked_range<int>& r) {
-    for (int i = r.begin(); i < r.end(); ++i)
-      std::copy(m_row_stiff[i].begin(), m_row_stiff[i].end(),
-                m_stiff_pairs.begin() + m_stiff_offset[i]);
-  });
-  // per segment, the point pairs that have it as j, in ascending index: those of its
+  // per segment, the point pairs that have it as j, in ascending number: those of its
   // incoming segment pairs (ascending row k; row k's point pairs with j are one run)
   m_stiff_in_offset.resize(n + 1);
   m_stiff_in_offset[0] = 0;
   tbb::parallel_for(tbb::blocked_range<int>(0, n, 256), [&](const tbb::blocked_range<int>& r) {
     for (int s = r.begin(); s < r.end(); ++s) {
       int count = 0;
-      for (const Incoming& in : m_incoming[s]) {
-        const PairForce& pf = m_pairs[in.k][in.index];
+      for (int q = m_incoming_offset[s]; q < m_incoming_offset[s + 1]; ++q) {
+        const PairForce& pf = m_pairs[m_incoming[q].k][m_incoming[q].index];
         count += pf.stiff_end - pf.stiff_begin;
       }
       m_stiff_in_offset[s + 1] = count;
     }
   });
   for (int i = 0; i < n; ++i) m_stiff_in_offset[i + 1] += m_stiff_in_offset[i];
-  m_stiff_in.resize(total);
+  m_stiff_in.resize(m_stiff_offset[n]);
   tbb::parallel_for(tbb::blocked_range<int>(0, n, 256), [&](const tbb::blocked_range<int>& r) {
     for (int s = r.begin(); s < r.end(); ++s) {
       int at = m_stiff_in_offset[s];
-      for (const Incoming& in : m_incoming[s]) {
+      for (int q = m_incoming_offset[s]; q < m_incoming_offset[s + 1]; ++q) {
+        const Incoming& in = m_incoming[q];
         const PairForce& pf = m_pairs[in.k][in.index];
+        const StiffPair* row = m_row_stiff[in.k].data();
         for (int t = pf.stiff_begin; t < pf.stiff_end; ++t)
-          m_stiff_in[at++] = m_stiff_offset[in.k] + t;
+          m_stiff_in[at++] = {row + t, m_stiff_offset[in.k] + t};
       }
     }
   });
@@ -523,7 +542,6 @@ void ContactTerm::set_operator_stiffness(bool on) {
   m_stiffness = on;
   if (!on) {
     for (auto& row : m_row_stiff) row.clear();
-    m_stiff_pairs.clear();
     m_stiff_offset.clear();
     m_stiff_in_offset.clear();
     m_stiff_in.clear();
@@ -546,15 +564,16 @@ Eigen::Vector3d ContactTerm::pair_product(const StiffPair& p, const double* xi,
 template <class Force>
 void ContactTerm::segment_product(int s, Force&& force, Vector12d& slot) const {
   // K x puts B_b f on j's control points and −B_a f on i's
-  for (int k = m_stiff_offset[s]; k < m_stiff_offset[s + 1]; ++k) {
-    const Eigen::Vector3d f = force(k);
-    const std::array<double, 4>& ba = m_basis[m_stiff_pairs[k].a];
+  const std::vector<StiffPair>& own = m_row_stiff[s];
+  for (int t = 0; t < static_cast<int>(own.size()); ++t) {
+    const Eigen::Vector3d f = force(s, own[t], m_stiff_offset[s] + t);
+    const std::array<double, 4>& ba = m_basis[own[t].a];
     for (int c = 0; c < 4; ++c) slot.segment<3>(3 * c) -= ba[c] * f;
   }
   for (int q = m_stiff_in_offset[s]; q < m_stiff_in_offset[s + 1]; ++q) {
-    const int k = m_stiff_in[q];
-    const Eigen::Vector3d f = force(k);
-    const std::array<double, 4>& bb = m_basis[m_stiff_pairs[k].b];
+    const StiffIn& in = m_stiff_in[q];
+    const Eigen::Vector3d f = force(-1, *in.pair, in.index);
+    const std::array<double, 4>& bb = m_basis[in.pair->b];
     for (int c = 0; c < 4; ++c) slot.segment<3>(3 * c) += bb[c] * f;
   }
 }
@@ -564,15 +583,15 @@ void ContactTerm::add_stiffness_product(const Model& model, const Eigen::VectorX
   if (!m_stiffness) return;
   const int rows = std::min<int>(m_num_seg, static_cast<int>(m_stiff_offset.size()) - 1);
   if (rows <= 0) return;  // no evaluation yet
-  m_stiff_product.resize(m_stiff_pairs.size());
+  m_stiff_product.resize(m_stiff_offset[rows]);
   // per point pair its force (pair_product), then per segment their sum (segment_product)
   tbb::parallel_for(tbb::blocked_range<int>(0, rows, 16), [&](const tbb::blocked_range<int>& r) {
     for (int i = r.begin(); i < r.end(); ++i) {
       const double* xi = x.data() + 3 * model.seg_cp[i];
-      for (int k = m_stiff_offset[i]; k < m_stiff_offset[i + 1]; ++k) {
-        const StiffPair& p = m_stiff_pairs[k];
-        m_stiff_product[k] = pair_product(p, xi, x.data() + 3 * model.seg_cp[p.j]);
-      }
+      const std::vector<StiffPair>& own = m_row_stiff[i];
+      for (int t = 0; t < static_cast<int>(own.size()); ++t)
+        m_stiff_product[m_stiff_offset[i] + t] =
+            pair_product(own[t], xi, x.data() + 3 * model.seg_cp[own[t].j]);
     }
   });
   // per segment, in a fixed order: its own row's pairs (it is i), then the pairs of rows
@@ -580,7 +599,7 @@ void ContactTerm::add_stiffness_product(const Model& model, const Eigen::VectorX
   m_product_accumulator.run(model, [&](int s, Vector12d& slot) {
     if (s < rows)
       segment_product(
-          s, [&](int k) { return m_stiff_product[k]; }, slot);
+          s, [&](int, const StiffPair&, int k) { return m_stiff_product[k]; }, slot);
     return 0.0;
   });
   m_product_accumulator.gather(model, y, 1.0);
@@ -600,9 +619,10 @@ void ContactTerm::add_stiffness_product_rows(const Model& model, const Eigen::Ve
                m_stiff_offset.begin()) -
            1;
   };
-  auto force = [&](int k) {
-    const StiffPair& p = m_stiff_pairs[k];
-    return pair_product(p, x.data() + 3 * model.seg_cp[owner(k)], x.data() + 3 * model.seg_cp[p.j]);
+  // (row: the owner when known, else −1)
+  auto force = [&](int row, const StiffPair& p, int k) {
+    if (row < 0) row = owner(k);
+    return pair_product(p, x.data() + 3 * model.seg_cp[row], x.data() + 3 * model.seg_cp[p.j]);
   };
   for (int s : segments) {
     if (s >= rows) continue;
@@ -651,10 +671,9 @@ bool ContactTerm::add_operator_segment_block(const Model& /*model*/, int s,
     m[4] += y * p.nz;
     m[5] += z * p.nz + p.kt;
   };
-  for (int k = m_stiff_offset[s]; k < m_stiff_offset[s + 1]; ++k)
-    add(m_stiff_pairs[k].a, m_stiff_pairs[k]);
+  for (const StiffPair& p : m_row_stiff[s]) add(p.a, p);
   for (int q = m_stiff_in_offset[s]; q < m_stiff_in_offset[s + 1]; ++q)
-    add(m_stiff_pairs[m_stiff_in[q]].b, m_stiff_pairs[m_stiff_in[q]]);
+    add(m_stiff_in[q].pair->b, *m_stiff_in[q].pair);
   double upper[10][6] = {};  // (u, v ≥ u) in order, each a symmetric 3×3
   for (int a = 0; a < m_points; ++a) {
     if (!used[a]) continue;

@@ -93,8 +93,10 @@ class ContactTerm : public Term {
  public:
   /// Largest supported Params::contact_points.
   static constexpr int MAX_CONTACT_POINTS = 64;
-  /// Default candidate margin δ in yarn radii (see candidate_margin()).
+  /// Default candidate margin δ in yarn radii (see candidate_margin()), and the largest
+  /// the margin grows to by itself.
   static constexpr double DEFAULT_MARGIN_RADII = 0.5;
+  static constexpr double MAX_ADAPTIVE_MARGIN_RADII = 4.0;
 
   /// Sizes the buffers for `model` (the BVH is built on the first evaluation). Throws
   /// std::invalid_argument if model.params.discretisation.contact_points exceeds
@@ -113,10 +115,15 @@ class ContactTerm : public Term {
   /// The candidate margin δ (cm): candidate segment pairs are found with boxes grown by
   /// δ/2 and kept until a contact point has moved more than δ/2 along some axis. Larger
   /// margins rebuild less often and test more candidates; results do not depend on it.
+  /// Unless set, δ adapts to the motion: it starts at DEFAULT_MARGIN_RADII radii and, at
+  /// a rebuild, grows 1.5× (up to MAX_ADAPTIVE_MARGIN_RADII radii) when the list lasted
+  /// fewer than MIN_LIST_EVALUATIONS evaluations, and shrinks 1.5× (down to the default)
+  /// when it lasted more than MAX_LIST_EVALUATIONS.
   double candidate_margin() const { return m_margin; }
-  /// Sets δ (cm, ≥ 0; 0 rebuilds whenever anything moved). Throws std::invalid_argument
-  /// for a negative or non-finite margin.
+  /// Sets δ (cm, ≥ 0; 0 rebuilds whenever anything moved) and keeps it. Throws
+  /// std::invalid_argument for a negative or non-finite margin.
   void set_candidate_margin(double margin);
+  static constexpr int MIN_LIST_EVALUATIONS = 3, MAX_LIST_EVALUATIONS = 12;
   /// Evaluations so far, and how many of them rebuilt the candidate list.
   long long evaluations() const override { return m_evaluations; }
   long long candidate_rebuilds() const { return m_rebuilds; }
@@ -183,7 +190,8 @@ class ContactTerm : public Term {
   // the stiffness product's force of point pair p, H (J x), from x at its segments' control
   // points xi (segment i's, the row that owns p) and xj
   Eigen::Vector3d pair_product(const StiffPair& p, const double* xi, const double* xj) const;
-  // segment s's 12 entries of K x from each point pair's force(k): its own row's pairs
+  // segment s's 12 entries of K x from each point pair's force(row, pair, number), row
+  // the owner or −1 where not at hand: its own row's pairs
   // (it is i), then the pairs of rows k < s that have it as j, in ascending k
   template <class Force>
   void segment_product(int s, Force&& force, Vector12d& slot) const;
@@ -213,7 +221,10 @@ class ContactTerm : public Term {
   // the candidate list: margin δ, points and grown boxes when it was built, and how far
   // the points moved since (largest per-axis displacement, per segment and overall)
   double m_margin = 0;
+  bool m_margin_adaptive = true;
   bool m_list_valid = false;
+  double m_list_margin = 0;       // δ of the current list
+  long long m_list_built_at = 0;  // m_evaluations when it was built
   const Model* m_list_model = nullptr;
   double m_list_radius = 0;
   double m_list_moved = 0;
@@ -222,19 +233,26 @@ class ContactTerm : public Term {
   std::vector<Aabb> m_list_boxes;
   std::vector<long long> m_list_box_tests;
   std::vector<std::vector<PairForce>> m_pairs;  // per segment i: pairs (i, j > i) in contact
-  // per segment s: the pairs (k < s, s) in contact, m_pairs[k][index], in ascending k (built
-  // after the kernels, so that the gather visits only pairs in contact rather than search
-  // every candidate)
+  // per segment s: the pairs (k < s, s) in contact, m_pairs[k][index], in ascending k, at
+  // [m_incoming_offset[s], m_incoming_offset[s + 1]) (built after the kernels by a counting
+  // sort, so that the gather visits only pairs in contact rather than search every
+  // candidate)
   struct Incoming {
     int k = 0, index = 0;
   };
-  std::vector<std::vector<Incoming>> m_incoming;
-  // with m_stiffness, the rows' point pairs in one array (row i's at [m_stiff_offset[i],
-  // m_stiff_offset[i + 1])), and per segment s the indices of those that have it as j, in
-  // ascending order (rows k < s in ascending k) at [m_stiff_in_offset[s], …[s + 1]): the
-  // operator's products visit them in this fixed order, from contiguous memory
-  std::vector<StiffPair> m_stiff_pairs;
-  std::vector<int> m_stiff_offset, m_stiff_in_offset, m_stiff_in;
+  std::vector<Incoming> m_incoming;
+  std::vector<int> m_incoming_offset, m_incoming_fill;
+  // with m_stiffness, the rows' point pairs stay in m_row_stiff; row i's are numbered
+  // [m_stiff_offset[i], m_stiff_offset[i + 1]) (the index of their products), and per
+  // segment s those that have it as j are listed in ascending order (rows k < s in
+  // ascending k) at [m_stiff_in_offset[s], …[s + 1]): the operator's products visit them
+  // in this fixed order
+  struct StiffIn {
+    const StiffPair* pair = nullptr;  // in m_row_stiff[k]
+    int index = 0;                    // its number
+  };
+  std::vector<int> m_stiff_offset, m_stiff_in_offset;
+  std::vector<StiffIn> m_stiff_in;
   mutable std::vector<Eigen::Vector3d> m_stiff_product;  // per point pair: H (J x) (dyn)
   std::vector<RowStats> m_rows;
   std::vector<std::vector<ContactPointPair>> m_row_records;
