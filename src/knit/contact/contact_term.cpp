@@ -7,6 +7,7 @@
 #include <cassert>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <stdexcept>
 #include <string>
 
@@ -70,6 +71,7 @@ void ContactTerm::resize(const Model& model) {
   m_list_valid = false;
   m_partners.resize(m_num_seg);
   m_pairs.resize(m_num_seg);
+  m_row_kv.resize(m_num_seg);
   m_rows.assign(m_num_seg, RowStats{});
   m_row_records.resize(m_num_seg);
   m_row_stiff.resize(m_num_seg);
@@ -166,7 +168,13 @@ void ContactTerm::tabulate_points(const Model& model, const Eigen::VectorXd& q,
 // ((n̂·Δv) n̂ = (Δy·Δv) Δy/|Δy|²), so one division 1/|Δy|² per tested pair serves both.
 // Sums over lanes are formed lane-wise and reduced in a fixed order: the result is a pure
 // function of the inputs (round-off differs from the plain kernel's order only).
-template <bool DAMP>
+//
+// With KV (the stiffness operator on, and damping's velocities at hand) the kernel also
+// forms the operator's product with the velocity, K v: per point pair in contact
+//   f = (k − kt) (Δy·Δv) Δy / |Δy|² + kt Δv,  k − kt = c (4/d⁴ + 4)/4r², kt = c (2/d⁴ − 2)/4r²
+// (k = c f''(d)/4r², kt = c |f'(d)|/(2r |Δy|), c = k ℓℓ ww: pair_product's formula with
+// u = Δv, and again no square root), B_b f on j's control points and −B_a f on i's.
+template <bool DAMP, bool KV>
 void ContactTerm::pair_kernel(const Model& model, int i, int j, RowStats& row) {
   // a candidate kept from an older list whose current boxes no longer overlap has no
   // point pair within 2r (see add_force_bvh) and is not counted
@@ -223,6 +231,14 @@ void ContactTerm::pair_kernel(const Model& model, int i, int j, RowStats& row) {
   std::fill_n(fbx, nbp, 0.0);
   std::fill_n(fby, nbp, 0.0);
   std::fill_n(fbz, nbp, 0.0);
+  static_assert(DAMP || !KV, "K v needs the velocities");
+  alignas(64) double kbx[KV ? CAP : 1], kby[KV ? CAP : 1], kbz[KV ? CAP : 1];
+  VecD kix = splat(0.0), kiy = kix, kiz = kix;
+  if constexpr (KV) {
+    std::fill_n(kbx, nbp, 0.0);
+    std::fill_n(kby, nbp, 0.0);
+    std::fill_n(kbz, nbp, 0.0);
+  }
   const VecD four_r2_v = splat(four_r2), inv_four_r2_v = splat(inv_four_r2);
   const VecD zero = splat(0.0), one = splat(1.0), two = splat(2.0);
   VecD energy = zero, min_d2 = splat(std::numeric_limits<double>::infinity());
@@ -242,6 +258,7 @@ void ContactTerm::pair_kernel(const Model& model, int i, int j, RowStats& row) {
       lla = splat(-2.0 * li * lj * quad.w[a]);
     }
     VecD sx = zero, sy = zero, sz = zero;
+    VecD ksx = zero, ksy = zero, ksz = zero;
     for (int kb = 0; kb < nbp; kb += LANES) {
       const VecD dx = load(bx + kb) - ax, dy = load(by + kb) - ay, dz = load(bz + kb) - az;
       const VecD d2 = dx * dx + dy * dy + dz * dz;
@@ -260,12 +277,25 @@ void ContactTerm::pair_kernel(const Model& model, int i, int j, RowStats& row) {
       if constexpr (DAMP) {
         const VecD dvx = load(bvx + kb) - avx, dvy = load(bvy + kb) - avy,
                    dvz = load(bvz + kb) - avz;
-        const VecD c = lla * w;  // −2 ℓℓ ww
-        g -= c * splat(kdiff) * (dx * dvx + dy * dvy + dz * dvz) * inv_d2;
+        const VecD c = lla * w;                                         // −2 ℓℓ ww
+        const VecD dot_d2 = (dx * dvx + dy * dvy + dz * dvz) * inv_d2;  // (Δy·Δv)/|Δy|²
+        g -= c * splat(kdiff) * dot_d2;
         const VecD ct = c * splat(kdt);
         fx = g * dx + ct * dvx;
         fy = g * dy + ct * dvy;
         fz = g * dz + ct * dvz;
+        if constexpr (KV) {
+          const VecD i4 = inv_dd * inv_dd, kc = kw * inv_four_r2_v;
+          const VecD kn = (in ? kc * (splat(4.0) * i4 + splat(4.0)) : zero) * dot_d2;
+          const VecD kt = in ? kc * (two * i4 - two) : zero;
+          const VecD kx = kn * dx + kt * dvx, ky = kn * dy + kt * dvy, kz = kn * dz + kt * dvz;
+          store(kbx + kb, load(kbx + kb) + kx);
+          store(kby + kb, load(kby + kb) + ky);
+          store(kbz + kb, load(kbz + kb) + kz);
+          ksx -= kx;
+          ksy -= ky;
+          ksz -= kz;
+        }
       } else {
         fx = g * dx;
         fy = g * dy;
@@ -293,6 +323,11 @@ void ContactTerm::pair_kernel(const Model& model, int i, int j, RowStats& row) {
     gix += basis_a * lane_sum(sx);
     giy += basis_a * lane_sum(sy);
     giz += basis_a * lane_sum(sz);
+    if constexpr (KV) {
+      kix += basis_a * lane_sum(ksx);
+      kiy += basis_a * lane_sum(ksy);
+      kiz += basis_a * lane_sum(ksz);
+    }
     if (m_record)
       for (int kb = 0; kb < nb; ++kb)
         if (d2row[kb] < four_r2) m_row_records[i].push_back({i, a, j, jb[kb]});
@@ -319,11 +354,17 @@ void ContactTerm::pair_kernel(const Model& model, int i, int j, RowStats& row) {
   row.contacts += n_contacts;
   row.energy += lane_sum(energy);
   VecD gjx = splat(0.0), gjy = gjx, gjz = gjx;
+  VecD kjx = gjx, kjy = gjx, kjz = gjx;
   for (int kb = 0; kb < nb; ++kb) {
     const VecD basis_b = load(m_basis[jb[kb]].data());
     gjx += basis_b * fbx[kb];
     gjy += basis_b * fby[kb];
     gjz += basis_b * fbz[kb];
+    if constexpr (KV) {
+      kjx += basis_b * kbx[kb];
+      kjy += basis_b * kby[kb];
+      kjz += basis_b * kbz[kb];
+    }
   }
   PairForce& pf = m_pairs[i].emplace_back();
   pf.j = j;
@@ -346,6 +387,17 @@ void ContactTerm::pair_kernel(const Model& model, int i, int j, RowStats& row) {
     pf.force_j[3 * c] = gjx[c];
     pf.force_j[3 * c + 1] = gjy[c];
     pf.force_j[3 * c + 2] = gjz[c];
+  }
+  if constexpr (KV) {
+    PairKv& kv = m_row_kv[i].emplace_back();
+    for (int c = 0; c < 4; ++c) {
+      kv.i[3 * c] = kix[c];
+      kv.i[3 * c + 1] = kiy[c];
+      kv.i[3 * c + 2] = kiz[c];
+      kv.j[3 * c] = kjx[c];
+      kv.j[3 * c + 1] = kjy[c];
+      kv.j[3 * c + 2] = kjz[c];
+    }
   }
 }
 
@@ -444,16 +496,19 @@ double ContactTerm::add_force_bvh(const Model& model, const Eigen::VectorXd& q,
       m_pairs[i].clear();
       if (m_record) m_row_records[i].clear();
       if (m_stiffness) m_row_stiff[i].clear();
+      m_row_kv[i].clear();
       RowStats& row = m_rows[i];
       row = RowStats{};
       if (rebuild) row.box_tests = m_list_box_tests[i];
       const std::vector<int>& partners = m_partners[i];
       for (auto it = std::upper_bound(partners.begin(), partners.end(), i); it != partners.end();
            ++it) {
-        if (m_has_velocity)
-          pair_kernel<true>(model, i, *it, row);
+        if (m_has_velocity && m_stiffness)
+          pair_kernel<true, true>(model, i, *it, row);
+        else if (m_has_velocity)
+          pair_kernel<true, false>(model, i, *it, row);
         else
-          pair_kernel<false>(model, i, *it, row);
+          pair_kernel<false, false>(model, i, *it, row);
       }
     }
   });
@@ -470,6 +525,19 @@ double ContactTerm::add_force_bvh(const Model& model, const Eigen::VectorXd& q,
     return m_rows[s].energy;
   });
   m_accumulator.gather(model, force, 1.0);
+  // K v in the same order
+  m_kv_valid = m_has_velocity && m_stiffness;
+  if (m_kv_valid) {
+    m_kv_accumulator.run(model, [&](int s, Vector12d& slot) {
+      for (const PairKv& kv : m_row_kv[s]) slot += kv.i;
+      for (int q = m_incoming_offset[s]; q < m_incoming_offset[s + 1]; ++q)
+        slot += m_row_kv[m_incoming[q].k][m_incoming[q].index].j;
+      return 0.0;
+    });
+    m_kv.setZero(q.size());
+    m_kv_accumulator.gather(model, m_kv, 1.0);
+    m_kv_velocity = v;
+  }
   m_timings.gather = seconds_since(t);
 
   double min_d2 = std::numeric_limits<double>::infinity();
@@ -540,6 +608,7 @@ void ContactTerm::set_operator_stiffness(bool on) {
   if (on && m_culling != ContactCulling::BVH)
     throw std::logic_error("the contact stiffness operator needs BVH culling");
   m_stiffness = on;
+  m_kv_valid = false;
   if (!on) {
     for (auto& row : m_row_stiff) row.clear();
     m_stiff_offset.clear();
@@ -583,6 +652,11 @@ void ContactTerm::add_stiffness_product(const Model& model, const Eigen::VectorX
   if (!m_stiffness) return;
   const int rows = std::min<int>(m_num_seg, static_cast<int>(m_stiff_offset.size()) - 1);
   if (rows <= 0) return;  // no evaluation yet
+  if (m_kv_valid && x.size() == m_kv_velocity.size() &&
+      std::memcmp(x.data(), m_kv_velocity.data(), sizeof(double) * x.size()) == 0) {
+    y += m_kv;  // x is the velocity of the last evaluation: its kernels formed K x
+    return;
+  }
   m_stiff_product.resize(m_stiff_offset[rows]);
   // per point pair its force (pair_product), then per segment their sum (segment_product)
   tbb::parallel_for(tbb::blocked_range<int>(0, rows, 16), [&](const tbb::blocked_range<int>& r) {

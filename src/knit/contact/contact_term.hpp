@@ -143,7 +143,9 @@ class ContactTerm : public Term {
   bool has_operator_stiffness() const override { return true; }
   void set_operator_stiffness(bool on) override;
   /// y += K x for the point pairs in contact at the last evaluation (in parallel, in a
-  /// fixed order: the result does not depend on the thread count).
+  /// fixed order: the result does not depend on the thread count). Where x is bitwise the
+  /// velocity of the last evaluation (with damping on), the kernels formed K x already
+  /// and it is added as it stands.
   void add_stiffness_product(const Model& model, const Eigen::VectorXd& x,
                              Eigen::VectorXd& y) const override;
   void add_stiffness_product_rows(const Model& model, const Eigen::VectorXd& x,
@@ -177,6 +179,10 @@ class ContactTerm : public Term {
     int j = 0, a = 0, b = 0;
     double nx = 0, ny = 0, nz = 0, k = 0, kt = 0;
   };
+  // a segment pair's share of K v, v the evaluation's velocity (m_stiffness with damping)
+  struct PairKv {
+    Vector12d i, j;  // on segment i's control points and on j's (dyn)
+  };
   // per-segment (row) outputs of the kernel stage
   struct RowStats {
     double energy = 0;
@@ -196,7 +202,7 @@ class ContactTerm : public Term {
   template <class Force>
   void segment_product(int s, Force&& force, Vector12d& slot) const;
   void tabulate_points(const Model& model, const Eigen::VectorXd& q, const Eigen::VectorXd& v);
-  template <bool DAMP>
+  template <bool DAMP, bool KV>
   void pair_kernel(const Model& model, int i, int j, RowStats& row);
   int points_inside(const Aabb& box, size_t base, int* out) const;
   double add_force_bvh(const Model& model, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
@@ -257,6 +263,12 @@ class ContactTerm : public Term {
   std::vector<RowStats> m_rows;
   std::vector<std::vector<ContactPointPair>> m_row_records;
   std::vector<std::vector<StiffPair>> m_row_stiff;  // per row i, with m_stiffness
+  // per row i, beside m_pairs[i]: K v of its pairs; their sum per control point m_kv, and
+  // the v it was formed with (add_stiffness_product of that v returns it)
+  std::vector<std::vector<PairKv>> m_row_kv;
+  SegmentAccumulator m_kv_accumulator;
+  Eigen::VectorXd m_kv, m_kv_velocity;
+  bool m_kv_valid = false;
   // add_stiffness_product: the per-segment sums
   mutable SegmentAccumulator m_product_accumulator;
   std::vector<ContactPointPair> m_point_pairs;
