@@ -277,16 +277,16 @@ void ContactTerm::pair_kernel(const Model& model, int i, int j, RowStats& row) {
       if constexpr (DAMP) {
         const VecD dvx = load(bvx + kb) - avx, dvy = load(bvy + kb) - avy,
                    dvz = load(bvz + kb) - avz;
-        const VecD c = lla * w;                                         // −2 ℓℓ ww
-        const VecD dot_d2 = (dx * dvx + dy * dvy + dz * dvz) * inv_d2;  // (Δy·Δv)/|Δy|²
-        g -= c * splat(kdiff) * dot_d2;
+        const VecD c = lla * w;                           // −2 ℓℓ ww
+        const VecD dot = dx * dvx + dy * dvy + dz * dvz;  // Δy·Δv
+        g -= c * splat(kdiff) * dot * inv_d2;
         const VecD ct = c * splat(kdt);
         fx = g * dx + ct * dvx;
         fy = g * dy + ct * dvy;
         fz = g * dz + ct * dvz;
         if constexpr (KV) {
           const VecD i4 = inv_dd * inv_dd, kc = kw * inv_four_r2_v;
-          const VecD kn = (in ? kc * (splat(4.0) * i4 + splat(4.0)) : zero) * dot_d2;
+          const VecD kn = (in ? kc * (splat(4.0) * i4 + splat(4.0)) : zero) * (dot * inv_d2);
           const VecD kt = in ? kc * (two * i4 - two) : zero;
           const VecD kx = kn * dx + kt * dvx, ky = kn * dy + kt * dvy, kz = kn * dz + kt * dvz;
           store(kbx + kb, load(kbx + kb) + kx);
