@@ -505,8 +505,13 @@ namespace {
 // made semidefinite (contact_pair_hessian, ContactHessian::MIRRORED) applied to x; its segment
 // parts are the oracle's blocks on each segment's own control points; and it is symmetric positive
 // semidefinite (xᵀ K y = yᵀ K x, xᵀ K x ≥ 0).
-TEST(ContactTerm, StiffnessOperatorMatchesTheDensePairHessians) {
-  const Sample s = pressed_patch();
+// With and without contact damping (the kernels take separate paths).
+class StiffnessOperator : public ::testing::TestWithParam<bool> {};
+
+TEST_P(StiffnessOperator, MatchesTheDensePairHessians) {
+  Params p;
+  if (!GetParam()) p.material.k_dt = p.material.k_dn = 0;
+  const Sample s = make(knit_like_sample(2, 2, 8, 0.125, 0.8), p);
   const Model& m = s.model;
   ContactTerm term(m);
   term.set_operator_stiffness(true);
@@ -563,6 +568,11 @@ TEST(ContactTerm, StiffnessOperatorMatchesTheDensePairHessians) {
   term.add_stiffness_product(m, x, none);
   EXPECT_EQ(max_abs(none), 0.0);
 }
+
+INSTANTIATE_TEST_SUITE_P(ContactTerm, StiffnessOperator, ::testing::Values(true, false),
+                         [](const ::testing::TestParamInfo<bool>& info) {
+                           return info.param ? "WithDamping" : "WithoutDamping";
+                         });
 
 // Evaluated with a velocity v (and damping on), the kernels form K v on the way: the product
 // with that v is the dense pair Hessians' as well, and agrees with the product taken apart

@@ -72,6 +72,8 @@ void ContactTerm::resize(const Model& model) {
   m_partners.resize(m_num_seg);
   m_pairs.resize(m_num_seg);
   m_row_kv.resize(m_num_seg);
+  m_row_si.resize(m_num_seg);
+  m_row_sj.resize(m_num_seg);
   m_rows.assign(m_num_seg, RowStats{});
   m_row_records.resize(m_num_seg);
   m_row_stiff.resize(m_num_seg);
@@ -169,18 +171,22 @@ void ContactTerm::tabulate_points(const Model& model, const Eigen::VectorXd& q,
 // Sums over lanes are formed lane-wise and reduced in a fixed order: the result is a pure
 // function of the inputs (round-off differs from the plain kernel's order only).
 //
-// With KV (the stiffness operator on, and damping's velocities at hand) the kernel also
-// forms the operator's product with the velocity, K v: per point pair in contact
-//   f = (k − kt) (Δy·Δv) Δy / |Δy|² + kt Δv,  k − kt = c (4/d⁴ + 4)/4r², kt = c (2/d⁴ − 2)/4r²
-// (k = c f''(d)/4r², kt = c |f'(d)|/(2r |Δy|), c = k ℓℓ ww: pair_product's formula with
-// u = Δv, and again no square root), B_b f on j's control points and −B_a f on i's.
-template <bool DAMP, bool KV>
-void ContactTerm::pair_kernel(const Model& model, int i, int j, RowStats& row) {
+// With STIFF (the stiffness operator on) the kernel also forms, per point pair in contact,
+// its stiffness k n̂n̂ᵀ + kt (I − n̂n̂ᵀ) = kn ΔyΔyᵀ + kt I with
+//   kn = (k − kt)/|Δy|² = c (4/d⁴ + 4)/(4r² |Δy|²),  kt = c (2/d⁴ − 2)/4r²
+// (k = c f''(d)/4r², kt = c |f'(d)|/(2r |Δy|), c = k ℓℓ ww; again no square root), and sums
+// its six numbers per contact point: over the row's pairs at i's points (`own`), per pair at
+// j's points (m_row_sj). With damping's velocities at hand too it forms the operator's
+// product with the velocity, K v: per point pair f = kn (Δy·Δv) Δy + kt Δv
+// (pair_product's formula with u = Δv), B_b f on j's control points and −B_a f on i's.
+template <bool DAMP, bool STIFF>
+void ContactTerm::pair_kernel(const Model& model, int i, int j, RowStats& row, OwnStiffness& own) {
+  constexpr bool KV = DAMP && STIFF;
   // a candidate kept from an older list whose current boxes no longer overlap has no
   // point pair within 2r (see add_force_bvh) and is not counted
   if (!m_boxes[i].overlaps(m_boxes[j])) return;
   ++row.candidates;
-  const int stiff_begin = m_stiffness ? static_cast<int>(m_row_stiff[i].size()) : 0;
+  const int stiff_begin = STIFF ? static_cast<int>(m_row_stiff[i].size()) : 0;
   const int P = m_points;
   const Params& prm = model.params;
   const QuadratureTable& quad = model.contact_quad;
@@ -231,8 +237,13 @@ void ContactTerm::pair_kernel(const Model& model, int i, int j, RowStats& row) {
   std::fill_n(fbx, nbp, 0.0);
   std::fill_n(fby, nbp, 0.0);
   std::fill_n(fbz, nbp, 0.0);
-  static_assert(DAMP || !KV, "K v needs the velocities");
   alignas(64) double kbx[KV ? CAP : 1], kby[KV ? CAP : 1], kbz[KV ? CAP : 1];
+  // per point of j: the sums of the six numbers (STIFF), and per lane of the current row of
+  // point pairs kn and kt
+  alignas(64) double sb[STIFF ? 6 : 1][STIFF ? CAP : 1];
+  alignas(64) double knrow[STIFF ? CAP : 1], ktrow[STIFF ? CAP : 1];
+  if constexpr (STIFF)
+    for (auto& e : sb) std::fill_n(e, nbp, 0.0);
   VecD kix = splat(0.0), kiy = kix, kiz = kix;
   if constexpr (KV) {
     std::fill_n(kbx, nbp, 0.0);
@@ -259,6 +270,9 @@ void ContactTerm::pair_kernel(const Model& model, int i, int j, RowStats& row) {
     }
     VecD sx = zero, sy = zero, sz = zero;
     VecD ksx = zero, ksy = zero, ksz = zero;
+    VecD sa[STIFF ? 6 : 1];
+    for (VecD& e : sa) e = zero;
+    VecL a_contacts = VecL{};
     for (int kb = 0; kb < nbp; kb += LANES) {
       const VecD dx = load(bx + kb) - ax, dy = load(by + kb) - ay, dz = load(bz + kb) - az;
       const VecD d2 = dx * dx + dy * dy + dz * dz;
@@ -273,6 +287,21 @@ void ContactTerm::pair_kernel(const Model& model, int i, int j, RowStats& row) {
       // f(d) = 1/d² + d² − 2; the force on y_j(t_b) is g Δy (+ damping)
       energy += in ? kw * (inv_dd + d2 * inv_four_r2_v - two) : zero;
       VecD g = -two * inv_four_r2_v * kw * (one - inv_dd * inv_dd);
+      VecD kn = zero, kt = zero;
+      if constexpr (STIFF) {
+        const VecD i4 = inv_dd * inv_dd, kc = kw * inv_four_r2_v;
+        kn = in ? kc * (splat(4.0) * i4 + splat(4.0)) * inv_d2 : zero;
+        kt = in ? kc * (two * i4 - two) : zero;
+        store(knrow + kb, kn);
+        store(ktrow + kb, kt);
+        const VecD nx = kn * dx, ny = kn * dy, nz = kn * dz;
+        const VecD e[6] = {nx * dx + kt, nx * dy, nx * dz, ny * dy + kt, ny * dz, nz * dz + kt};
+        for (int c = 0; c < 6; ++c) {
+          sa[c] += e[c];
+          store(sb[c] + kb, load(sb[c] + kb) + e[c]);
+        }
+        a_contacts |= in;
+      }
       VecD fx, fy, fz;
       if constexpr (DAMP) {
         const VecD dvx = load(bvx + kb) - avx, dvy = load(bvy + kb) - avy,
@@ -285,10 +314,8 @@ void ContactTerm::pair_kernel(const Model& model, int i, int j, RowStats& row) {
         fy = g * dy + ct * dvy;
         fz = g * dz + ct * dvz;
         if constexpr (KV) {
-          const VecD i4 = inv_dd * inv_dd, kc = kw * inv_four_r2_v;
-          const VecD kn = (in ? kc * (splat(4.0) * i4 + splat(4.0)) : zero) * (dot * inv_d2);
-          const VecD kt = in ? kc * (two * i4 - two) : zero;
-          const VecD kx = kn * dx + kt * dvx, ky = kn * dy + kt * dvy, kz = kn * dz + kt * dvz;
+          const VecD knd = kn * dot;
+          const VecD kx = knd * dx + kt * dvx, ky = knd * dy + kt * dvy, kz = knd * dz + kt * dvz;
           store(kbx + kb, load(kbx + kb) + kx);
           store(kby + kb, load(kby + kb) + ky);
           store(kbz + kb, load(kbz + kb) + kz);
@@ -331,18 +358,20 @@ void ContactTerm::pair_kernel(const Model& model, int i, int j, RowStats& row) {
     if (m_record)
       for (int kb = 0; kb < nb; ++kb)
         if (d2row[kb] < four_r2) m_row_records[i].push_back({i, a, j, jb[kb]});
-    if (m_stiffness)
+    if constexpr (STIFF) {
+      if (!any(a_contacts)) continue;
+      std::array<double, 6>& sum = own.s[a];
+      if (!own.used[a]) {
+        sum.fill(0.0);
+        own.used[a] = 1;
+      }
+      for (int c = 0; c < 6; ++c) sum[c] += lane_sum(sa[c]);
       for (int kb = 0; kb < nb; ++kb) {
         if (!(d2row[kb] < four_r2)) continue;
-        const double dist = std::sqrt(d2row[kb]);
-        const double inv = 1.0 / dist;
-        const double d = dist * std::sqrt(inv_four_r2);
-        m_row_stiff[i].push_back(
-            {j, a, jb[kb], (bx[kb] - m_px[bi + a]) * inv, (by[kb] - m_py[bi + a]) * inv,
-             (bz[kb] - m_pz[bi + a]) * inv,
-             kl * quad.w[a] * bw[kb] * contact_potential_d2(d) * inv_four_r2,
-             kl * quad.w[a] * bw[kb] * std::abs(contact_potential_d1(d)) / (2 * r * dist)});
+        m_row_stiff[i].push_back({j, a, jb[kb], bx[kb] - m_px[bi + a], by[kb] - m_py[bi + a],
+                                  bz[kb] - m_pz[bi + a], knrow[kb], ktrow[kb]});
       }
+    }
   }
   // the smallest squared distance over all lanes is < 4r² exactly when some pair is in
   // contact, and then it is the smallest over the pairs in contact
@@ -369,9 +398,20 @@ void ContactTerm::pair_kernel(const Model& model, int i, int j, RowStats& row) {
   PairForce& pf = m_pairs[i].emplace_back();
   pf.j = j;
   pf.min_d2 = lane_min;
-  if (m_stiffness) {
+  if constexpr (STIFF) {
     pf.stiff_begin = stiff_begin;
     pf.stiff_end = static_cast<int>(m_row_stiff[i].size());
+    // j's points in contact and their sums
+    std::vector<PointStiffness>& sj = m_row_sj[i];
+    pf.sj_begin = static_cast<int>(sj.size());
+    for (int kb = 0; kb < nb; ++kb) {
+      // a point of j in contact has a positive sum on the diagonal (kt ≥ 0, kn > 0)
+      if (!(sb[0][kb] + sb[3][kb] + sb[5][kb] > 0)) continue;
+      PointStiffness& ps = sj.emplace_back();
+      ps.point = jb[kb];
+      for (int c = 0; c < 6; ++c) ps.s[c] = sb[c][kb];
+    }
+    pf.sj_end = static_cast<int>(sj.size());
   }
   for (int l = 0; l < LANES; ++l)
     if (min_d2[l] == lane_min) {
@@ -495,8 +535,13 @@ double ContactTerm::add_force_bvh(const Model& model, const Eigen::VectorXd& q,
     for (int i = range.begin(); i < range.end(); ++i) {
       m_pairs[i].clear();
       if (m_record) m_row_records[i].clear();
-      if (m_stiffness) m_row_stiff[i].clear();
       m_row_kv[i].clear();
+      OwnStiffness own;
+      if (m_stiffness) {
+        m_row_stiff[i].clear();
+        m_row_sj[i].clear();
+        own.used.fill(0);
+      }
       RowStats& row = m_rows[i];
       row = RowStats{};
       if (rebuild) row.box_tests = m_list_box_tests[i];
@@ -504,11 +549,20 @@ double ContactTerm::add_force_bvh(const Model& model, const Eigen::VectorXd& q,
       for (auto it = std::upper_bound(partners.begin(), partners.end(), i); it != partners.end();
            ++it) {
         if (m_has_velocity && m_stiffness)
-          pair_kernel<true, true>(model, i, *it, row);
+          pair_kernel<true, true>(model, i, *it, row, own);
         else if (m_has_velocity)
-          pair_kernel<true, false>(model, i, *it, row);
+          pair_kernel<true, false>(model, i, *it, row, own);
+        else if (m_stiffness)
+          pair_kernel<false, true>(model, i, *it, row, own);
         else
-          pair_kernel<false, false>(model, i, *it, row);
+          pair_kernel<false, false>(model, i, *it, row, own);
+      }
+      if (m_stiffness) {
+        // the row's own sums, compacted
+        std::vector<PointStiffness>& si = m_row_si[i];
+        si.clear();
+        for (int a = 0; a < m_points; ++a)
+          if (own.used[a]) si.push_back({a, own.s[a]});
       }
     }
   });
@@ -611,6 +665,8 @@ void ContactTerm::set_operator_stiffness(bool on) {
   m_kv_valid = false;
   if (!on) {
     for (auto& row : m_row_stiff) row.clear();
+    for (auto& row : m_row_si) row.clear();
+    for (auto& row : m_row_sj) row.clear();
     m_stiff_offset.clear();
     m_stiff_in_offset.clear();
     m_stiff_in.clear();
@@ -619,15 +675,15 @@ void ContactTerm::set_operator_stiffness(bool on) {
 
 Eigen::Vector3d ContactTerm::pair_product(const StiffPair& p, const double* xi,
                                           const double* xj) const {
-  // f = k n̂ (n̂·u) + kt (u − n̂ (n̂·u)), u = J x the change of Δ = y_j(t_b) − y_i(t_a)
+  // f = k n̂ (n̂·u) + kt (u − n̂ (n̂·u)) = kn (Δ·u) Δ + kt u, u = J x the change of
+  // Δ = y_j(t_b) − y_i(t_a)
   const std::array<double, 4>& ba = m_basis[p.a];
   const std::array<double, 4>& bb = m_basis[p.b];
   double u[3] = {0, 0, 0};
   for (int c = 0; c < 4; ++c)
     for (int d = 0; d < 3; ++d) u[d] += bb[c] * xj[3 * c + d] - ba[c] * xi[3 * c + d];
-  const Eigen::Vector3d uv(u[0], u[1], u[2]), n(p.nx, p.ny, p.nz);
-  const double un = n.dot(uv);
-  return (p.k - p.kt) * un * n + p.kt * uv;
+  const Eigen::Vector3d uv(u[0], u[1], u[2]), delta(p.dx, p.dy, p.dz);
+  return (p.kn * delta.dot(uv)) * delta + p.kt * uv;
 }
 
 template <class Force>
@@ -720,34 +776,36 @@ bool ContactTerm::add_operator_segment_block(const Model& /*model*/, int s,
   if (!m_stiffness) return false;
   const int rows = std::min<int>(m_num_seg, static_cast<int>(m_stiff_offset.size()) - 1);
   if (s >= rows) return false;  // (no evaluation yet)
-  if (m_stiff_offset[s] == m_stiff_offset[s + 1] &&
-      m_stiff_in_offset[s] == m_stiff_in_offset[s + 1])
-    return false;
   // Σ_a (b_a b_aᵀ) ⊗ S_a, S_a = Σ over the point pairs at the segment's point a of
-  // k n̂n̂ᵀ + kt (I − n̂n̂ᵀ): the 3×3 sums first, per point (6 numbers, symmetric), then one
+  // k n̂n̂ᵀ + kt (I − n̂n̂ᵀ): the kernels summed the 3×3s (6 numbers, symmetric) per point,
+  // over its own row and per incoming pair; here those sums are added up, then one
   // Kronecker product per point in contact, its upper triangle of 3×3 blocks, then mirrored
-  // (per point pair, the product cost 90 multiply-adds; per point it costs 60, and a pair
-  // only 6)
+  // (per point pair, the product cost 90 multiply-adds; per point it costs 60)
   std::array<std::array<double, 6>, MAX_CONTACT_POINTS> S;
   std::array<char, MAX_CONTACT_POINTS> used{};
-  auto add = [&](int a, const StiffPair& p) {
-    std::array<double, 6>& m = S[a];
-    if (!used[a]) {
-      m.fill(0.0);
-      used[a] = 1;
+  bool any_used = false;
+  for (const PointStiffness& ps : m_row_si[s]) {
+    S[ps.point] = ps.s;
+    used[ps.point] = 1;
+    any_used = true;
+  }
+  for (int q = m_incoming_offset[s]; q < m_incoming_offset[s + 1]; ++q) {
+    const Incoming& in = m_incoming[q];
+    const PairForce& pf = m_pairs[in.k][in.index];
+    const std::vector<PointStiffness>& sj = m_row_sj[in.k];
+    for (int t = pf.sj_begin; t < pf.sj_end; ++t) {
+      const PointStiffness& ps = sj[t];
+      std::array<double, 6>& m = S[ps.point];
+      if (!used[ps.point]) {
+        m = ps.s;
+        used[ps.point] = 1;
+      } else {
+        for (int c = 0; c < 6; ++c) m[c] += ps.s[c];
+      }
+      any_used = true;
     }
-    const double kn = p.k - p.kt;
-    const double x = kn * p.nx, y = kn * p.ny, z = kn * p.nz;
-    m[0] += x * p.nx + p.kt;
-    m[1] += x * p.ny;
-    m[2] += x * p.nz;
-    m[3] += y * p.ny + p.kt;
-    m[4] += y * p.nz;
-    m[5] += z * p.nz + p.kt;
-  };
-  for (const StiffPair& p : m_row_stiff[s]) add(p.a, p);
-  for (int q = m_stiff_in_offset[s]; q < m_stiff_in_offset[s + 1]; ++q)
-    add(m_stiff_in[q].pair->b, *m_stiff_in[q].pair);
+  }
+  if (!any_used) return false;
   double upper[10][6] = {};  // (u, v ≥ u) in order, each a symmetric 3×3
   for (int a = 0; a < m_points; ++a) {
     if (!used[a]) continue;

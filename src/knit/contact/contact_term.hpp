@@ -171,14 +171,28 @@ class ContactTerm : public Term {
     Eigen::Vector3d delta;         // y_j − y_i at that point pair (cm)
     int point_a = 0, point_b = 0;  // its contact points on i and on j
     int stiff_begin = 0, stiff_end = 0;  // its point pairs in m_row_stiff[i] (m_stiffness)
+    int sj_begin = 0, sj_end = 0;        // its sums at j's points in m_row_sj[i] (m_stiffness)
   };
-  // a point pair in contact of row i's segment pair (i, j): its points, its normal, its
-  // normal stiffness k = c f''(d)/(2r)² and its transverse one kt = c |f'(d)|/(2r |Δ|)
-  // (dyn/cm; ContactHessian::MIRRORED)
+  // a point pair in contact of row i's segment pair (i, j): its points, Δ = y_j(t_b) −
+  // y_i(t_a) (cm), and its stiffness kn ΔΔᵀ + kt I: kn = (k − kt)/|Δ|² with the normal
+  // stiffness k = c f''(d)/(2r)² and the transverse one kt = c |f'(d)|/(2r |Δ|) (dyn/cm;
+  // ContactHessian::MIRRORED)
   struct StiffPair {
     int j = 0, a = 0, b = 0;
-    double nx = 0, ny = 0, nz = 0, k = 0, kt = 0;
+    double dx = 0, dy = 0, dz = 0, kn = 0, kt = 0;
   };
+  // the six numbers (xx, xy, xz, yy, yz, zz) of the sum of point pairs' stiffnesses at one
+  // contact point of a segment (dyn/cm)
+  struct PointStiffness {
+    int point = 0;
+    std::array<double, 6> s{};
+  };
+  // a row's sums at its own segment's points over all its pairs (pair_kernel's scratch)
+  struct OwnStiffness {
+    std::array<std::array<double, 6>, MAX_CONTACT_POINTS> s;
+    std::array<char, MAX_CONTACT_POINTS> used;
+  };
+
   // a segment pair's share of K v, v the evaluation's velocity (m_stiffness with damping)
   struct PairKv {
     Vector12d i, j;  // on segment i's control points and on j's (dyn)
@@ -202,8 +216,8 @@ class ContactTerm : public Term {
   template <class Force>
   void segment_product(int s, Force&& force, Vector12d& slot) const;
   void tabulate_points(const Model& model, const Eigen::VectorXd& q, const Eigen::VectorXd& v);
-  template <bool DAMP, bool KV>
-  void pair_kernel(const Model& model, int i, int j, RowStats& row);
+  template <bool DAMP, bool STIFF>
+  void pair_kernel(const Model& model, int i, int j, RowStats& row, OwnStiffness& own);
   int points_inside(const Aabb& box, size_t base, int* out) const;
   double add_force_bvh(const Model& model, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
                        Eigen::VectorXd& force);
@@ -266,6 +280,9 @@ class ContactTerm : public Term {
   // per row i, beside m_pairs[i]: K v of its pairs; their sum per control point m_kv, and
   // the v it was formed with (add_stiffness_product of that v returns it)
   std::vector<std::vector<PairKv>> m_row_kv;
+  // with m_stiffness, per row i: the sums at segment i's contact points over its pairs, and
+  // per pair (PairForce::sj_begin …) at segment j's (add_operator_segment_block adds them)
+  std::vector<std::vector<PointStiffness>> m_row_si, m_row_sj;
   SegmentAccumulator m_kv_accumulator;
   Eigen::VectorXd m_kv, m_kv_velocity;
   bool m_kv_valid = false;
