@@ -546,8 +546,12 @@ double ContactTerm::add_force_bvh(const Model& model, const Eigen::VectorXd& q,
       row = RowStats{};
       if (rebuild) row.box_tests = m_list_box_tests[i];
       const std::vector<int>& partners = m_partners[i];
+      const Aabb& box_i = m_boxes[i];
       for (auto it = std::upper_bound(partners.begin(), partners.end(), i); it != partners.end();
            ++it) {
+        // most candidates of a wide list are out of reach: tested here, before the kernel's
+        // set-up (pair_kernel tests it again)
+        if (!box_i.overlaps(m_boxes[*it])) continue;
         if (m_has_velocity && m_stiffness)
           pair_kernel<true, true>(model, i, *it, row, own);
         else if (m_has_velocity)
