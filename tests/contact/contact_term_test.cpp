@@ -500,12 +500,38 @@ TEST(ContactTerm, PushedYarnsNeverComeCloserThanHalfTheContactDistance) {
 namespace knit {
 namespace {
 
+// The oracle: Σ over segment pairs of the dense pair Hessians made semidefinite
+// (contact_pair_hessian, ContactHessian::MIRRORED) applied to x; with `blocks`, also their
+// parts on each segment's own control points.
+Eigen::VectorXd dense_operator_product(const Sample& s, const Eigen::VectorXd& x,
+                                       std::vector<Matrix12d>* blocks = nullptr) {
+  const Model& m = s.model;
+  Eigen::VectorXd out = Eigen::VectorXd::Zero(x.size());
+  if (blocks) blocks->assign(m.num_seg(), Matrix12d::Zero());
+  for (int i = 0; i < m.num_seg(); ++i)
+    for (int j = i + 1; j < m.num_seg(); ++j) {
+      if (m.neighbours(i, j)) continue;
+      const Eigen::Matrix<double, 24, 24> hess = contact_pair_hessian(
+          gather_segment(s.q, m.seg_cp[i]), gather_segment(s.q, m.seg_cp[j]), m.rest_length[i],
+          m.rest_length[j], m.params, m.contact_quad, ContactHessian::MIRRORED);
+      Eigen::Matrix<double, 24, 1> xij;
+      xij << x.segment<12>(3 * m.seg_cp[i]), x.segment<12>(3 * m.seg_cp[j]);
+      const Eigen::Matrix<double, 24, 1> y = hess * xij;
+      out.segment<12>(3 * m.seg_cp[i]) += y.head<12>();
+      out.segment<12>(3 * m.seg_cp[j]) += y.tail<12>();
+      if (!blocks) continue;
+      (*blocks)[i] += hess.topLeftCorner<12, 12>();
+      (*blocks)[j] += hess.bottomRightCorner<12, 12>();
+    }
+  return out;
+}
+
 // The stiffness operator of the IMEX_CONTACT step against a brute-force oracle: K x for
 // random x equals Σ over all non-neighbour segment pairs of the dense pair Hessians
 // made semidefinite (contact_pair_hessian, ContactHessian::MIRRORED) applied to x; its segment
 // parts are the oracle's blocks on each segment's own control points; and it is symmetric positive
-// semidefinite (xᵀ K y = yᵀ K x, xᵀ K x ≥ 0).
-// With and without contact damping (the kernels take separate paths).
+// semidefinite (xᵀ K y = yᵀ K x, xᵀ K x ≥ 0). With and without contact damping (the
+// kernels take separate paths).
 class StiffnessOperator : public ::testing::TestWithParam<bool> {};
 
 TEST_P(StiffnessOperator, MatchesTheDensePairHessians) {
@@ -518,22 +544,9 @@ TEST_P(StiffnessOperator, MatchesTheDensePairHessians) {
   force_of(term, s, Eigen::VectorXd::Zero(s.q.size()));
   ASSERT_GT(term.last_stats().point_pairs_in_contact, 50);
   const int n = static_cast<int>(s.q.size());
-  Eigen::VectorXd oracle_x = Eigen::VectorXd::Zero(n), x = random_vector(n, 1.0, 11);
-  std::vector<Matrix12d> oracle_blocks(m.num_seg(), Matrix12d::Zero());
-  for (int i = 0; i < m.num_seg(); ++i)
-    for (int j = i + 1; j < m.num_seg(); ++j) {
-      if (m.neighbours(i, j)) continue;
-      const Eigen::Matrix<double, 24, 24> hess = contact_pair_hessian(
-          gather_segment(s.q, m.seg_cp[i]), gather_segment(s.q, m.seg_cp[j]), m.rest_length[i],
-          m.rest_length[j], m.params, m.contact_quad, ContactHessian::MIRRORED);
-      Eigen::Matrix<double, 24, 1> xij;
-      xij << x.segment<12>(3 * m.seg_cp[i]), x.segment<12>(3 * m.seg_cp[j]);
-      const Eigen::Matrix<double, 24, 1> y = hess * xij;
-      oracle_x.segment<12>(3 * m.seg_cp[i]) += y.head<12>();
-      oracle_x.segment<12>(3 * m.seg_cp[j]) += y.tail<12>();
-      oracle_blocks[i] += hess.topLeftCorner<12, 12>();
-      oracle_blocks[j] += hess.bottomRightCorner<12, 12>();
-    }
+  const Eigen::VectorXd x = random_vector(n, 1.0, 11);
+  std::vector<Matrix12d> oracle_blocks;
+  const Eigen::VectorXd oracle_x = dense_operator_product(s, x, &oracle_blocks);
   Eigen::VectorXd kx = Eigen::VectorXd::Zero(n);
   term.add_stiffness_product(m, x, kx);
   ASSERT_GT(max_abs(oracle_x), 0.0);
@@ -587,19 +600,7 @@ TEST(ContactTerm, StiffnessProductWithTheEvaluationsVelocityIsFormedByTheKernels
   const Eigen::VectorXd v = random_vector(n, 1.0, 13);
   force_of(term, s, v);
   ASSERT_GT(term.last_stats().point_pairs_in_contact, 50);
-  Eigen::VectorXd oracle = Eigen::VectorXd::Zero(n);
-  for (int i = 0; i < m.num_seg(); ++i)
-    for (int j = i + 1; j < m.num_seg(); ++j) {
-      if (m.neighbours(i, j)) continue;
-      const Eigen::Matrix<double, 24, 24> hess = contact_pair_hessian(
-          gather_segment(s.q, m.seg_cp[i]), gather_segment(s.q, m.seg_cp[j]), m.rest_length[i],
-          m.rest_length[j], m.params, m.contact_quad, ContactHessian::MIRRORED);
-      Eigen::Matrix<double, 24, 1> vij;
-      vij << v.segment<12>(3 * m.seg_cp[i]), v.segment<12>(3 * m.seg_cp[j]);
-      const Eigen::Matrix<double, 24, 1> y = hess * vij;
-      oracle.segment<12>(3 * m.seg_cp[i]) += y.head<12>();
-      oracle.segment<12>(3 * m.seg_cp[j]) += y.tail<12>();
-    }
+  const Eigen::VectorXd oracle = dense_operator_product(s, v);
   ASSERT_GT(max_abs(oracle), 0.0);
   Eigen::VectorXd kv = Eigen::VectorXd::Zero(n);
   term.add_stiffness_product(m, v, kv);

@@ -33,6 +33,27 @@ using lanes::store;
 using lanes::VecD;
 using lanes::VecL;
 
+// a vector of point pairs' (x, y, z): added at j's points (bx, by, bz), taken from i's
+// point's lane sums (sx, sy, sz)
+inline void add_pair(VecD x, VecD y, VecD z, double* bx, double* by, double* bz, VecD& sx, VecD& sy,
+                     VecD& sz) {
+  store(bx, load(bx) + x);
+  store(by, load(by) + y);
+  store(bz, load(bz) + z);
+  sx -= x;
+  sy -= y;
+  sz -= z;
+}
+
+// out = (x₀, y₀, z₀, …, x₃, y₃, z₃): a segment's 4 control points, one per lane, per axis
+void interleave(VecD x, VecD y, VecD z, Vector12d& out) {
+  for (int c = 0; c < 4; ++c) {
+    out[3 * c] = x[c];
+    out[3 * c + 1] = y[c];
+    out[3 * c + 2] = z[c];
+  }
+}
+
 bool has_damping(const Model& model, const Eigen::VectorXd& q, const Eigen::VectorXd& v) {
   return v.size() == q.size() &&
          (model.params.material.k_dt != 0 || model.params.material.k_dn != 0);
@@ -316,12 +337,7 @@ void ContactTerm::pair_kernel(const Model& model, int i, int j, RowStats& row, O
         if constexpr (KV) {
           const VecD knd = kn * dot;
           const VecD kx = knd * dx + kt * dvx, ky = knd * dy + kt * dvy, kz = knd * dz + kt * dvz;
-          store(kbx + kb, load(kbx + kb) + kx);
-          store(kby + kb, load(kby + kb) + ky);
-          store(kbz + kb, load(kbz + kb) + kz);
-          ksx -= kx;
-          ksy -= ky;
-          ksz -= kz;
+          add_pair(kx, ky, kz, kbx + kb, kby + kb, kbz + kb, ksx, ksy, ksz);
         }
       } else {
         fx = g * dx;
@@ -339,12 +355,7 @@ void ContactTerm::pair_kernel(const Model& model, int i, int j, RowStats& row, O
       mda = closer ? splat(a) : mda;
       mdb = closer ? splat(kb) + lane_index : mdb;
       min_d2 = closer ? d2 : min_d2;
-      store(fbx + kb, load(fbx + kb) + fx);
-      store(fby + kb, load(fby + kb) + fy);
-      store(fbz + kb, load(fbz + kb) + fz);
-      sx -= fx;
-      sy -= fy;
-      sz -= fz;
+      add_pair(fx, fy, fz, fbx + kb, fby + kb, fbz + kb, sx, sy, sz);
     }
     const VecD basis_a = load(m_basis[a].data());
     gix += basis_a * lane_sum(sx);
@@ -420,24 +431,12 @@ void ContactTerm::pair_kernel(const Model& model, int i, int j, RowStats& row, O
       pf.point_b = jb[static_cast<int>(mdb[l])];
       break;
     }
-  for (int c = 0; c < 4; ++c) {
-    pf.force_i[3 * c] = gix[c];
-    pf.force_i[3 * c + 1] = giy[c];
-    pf.force_i[3 * c + 2] = giz[c];
-    pf.force_j[3 * c] = gjx[c];
-    pf.force_j[3 * c + 1] = gjy[c];
-    pf.force_j[3 * c + 2] = gjz[c];
-  }
+  interleave(gix, giy, giz, pf.force_i);
+  interleave(gjx, gjy, gjz, pf.force_j);
   if constexpr (KV) {
     PairKv& kv = m_row_kv[i].emplace_back();
-    for (int c = 0; c < 4; ++c) {
-      kv.i[3 * c] = kix[c];
-      kv.i[3 * c + 1] = kiy[c];
-      kv.i[3 * c + 2] = kiz[c];
-      kv.j[3 * c] = kjx[c];
-      kv.j[3 * c + 1] = kjy[c];
-      kv.j[3 * c + 2] = kjz[c];
-    }
+    interleave(kix, kiy, kiz, kv.i);
+    interleave(kjx, kjy, kjz, kv.j);
   }
 }
 
