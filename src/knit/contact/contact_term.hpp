@@ -97,6 +97,8 @@ class ContactTerm : public Term {
   /// the margin grows to by itself.
   static constexpr double DEFAULT_MARGIN_RADII = 0.5;
   static constexpr double MAX_ADAPTIVE_MARGIN_RADII = 4.0;
+  /// The list lifetimes (evaluations) outside which an adaptive margin grows or shrinks.
+  static constexpr int MIN_LIST_EVALUATIONS = 3, MAX_LIST_EVALUATIONS = 12;
 
   /// Sizes the buffers for `model` (the BVH is built on the first evaluation). Throws
   /// std::invalid_argument if model.params.discretisation.contact_points exceeds
@@ -123,7 +125,6 @@ class ContactTerm : public Term {
   /// Sets δ (cm, ≥ 0; 0 rebuilds whenever anything moved) and keeps it. Throws
   /// std::invalid_argument for a negative or non-finite margin.
   void set_candidate_margin(double margin);
-  static constexpr int MIN_LIST_EVALUATIONS = 3, MAX_LIST_EVALUATIONS = 12;
   /// Evaluations so far, and how many of them rebuilt the candidate list.
   long long evaluations() const override { return m_evaluations; }
   long long candidate_rebuilds() const { return m_rebuilds; }
@@ -210,9 +211,9 @@ class ContactTerm : public Term {
   // the stiffness product's force of point pair p, H (J x), from x at its segments' control
   // points xi (segment i's, the row that owns p) and xj
   Eigen::Vector3d pair_product(const StiffPair& p, const double* xi, const double* xj) const;
-  // segment s's 12 entries of K x from each point pair's force(row, pair, number), row
-  // the owner or −1 where not at hand: its own row's pairs
-  // (it is i), then the pairs of rows k < s that have it as j, in ascending k
+  // segment s's 12 entries of K x from each point pair's force(row, pair, number) (row: the
+  // pair's owner, or −1 where not at hand): its own row's pairs (it is i), then the pairs
+  // of rows k < s that have it as j, in ascending k
   template <class Force>
   void segment_product(int s, Force&& force, Vector12d& slot) const;
   void tabulate_points(const Model& model, const Eigen::VectorXd& q, const Eigen::VectorXd& v);
@@ -280,12 +281,12 @@ class ContactTerm : public Term {
   // per row i, beside m_pairs[i]: K v of its pairs; their sum per control point m_kv, and
   // the v it was formed with (add_stiffness_product of that v returns it)
   std::vector<std::vector<PairKv>> m_row_kv;
-  // with m_stiffness, per row i: the sums at segment i's contact points over its pairs, and
-  // per pair (PairForce::sj_begin …) at segment j's (add_operator_segment_block adds them)
-  std::vector<std::vector<PointStiffness>> m_row_si, m_row_sj;
   SegmentAccumulator m_kv_accumulator;
   Eigen::VectorXd m_kv, m_kv_velocity;
   bool m_kv_valid = false;
+  // with m_stiffness, per row i: the sums at segment i's contact points over its pairs, and
+  // per pair (PairForce::sj_begin …) at segment j's (add_operator_segment_block adds them)
+  std::vector<std::vector<PointStiffness>> m_row_si, m_row_sj;
   // add_stiffness_product: the per-segment sums
   mutable SegmentAccumulator m_product_accumulator;
   std::vector<ContactPointPair> m_point_pairs;
