@@ -631,34 +631,6 @@ void ContactTerm::index_incoming_pairs(int n) {
   m_stiff_offset[0] = 0;
   for (int i = 0; i < n; ++i)
     m_stiff_offset[i + 1] = m_stiff_offset[i] + static_cast<int>(m_row_stiff[i].size());
-  // per segment, the point pairs that have it as j, in ascending number: those of its
-  // incoming segment pairs (ascending row k; row k's point pairs with j are one run)
-  m_stiff_in_offset.resize(n + 1);
-  m_stiff_in_offset[0] = 0;
-  tbb::parallel_for(tbb::blocked_range<int>(0, n, 256), [&](const tbb::blocked_range<int>& r) {
-    for (int s = r.begin(); s < r.end(); ++s) {
-      int count = 0;
-      for (int q = m_incoming_offset[s]; q < m_incoming_offset[s + 1]; ++q) {
-        const PairForce& pf = m_pairs[m_incoming[q].k][m_incoming[q].index];
-        count += pf.stiff_end - pf.stiff_begin;
-      }
-      m_stiff_in_offset[s + 1] = count;
-    }
-  });
-  for (int i = 0; i < n; ++i) m_stiff_in_offset[i + 1] += m_stiff_in_offset[i];
-  m_stiff_in.resize(m_stiff_offset[n]);
-  tbb::parallel_for(tbb::blocked_range<int>(0, n, 256), [&](const tbb::blocked_range<int>& r) {
-    for (int s = r.begin(); s < r.end(); ++s) {
-      int at = m_stiff_in_offset[s];
-      for (int q = m_incoming_offset[s]; q < m_incoming_offset[s + 1]; ++q) {
-        const Incoming& in = m_incoming[q];
-        const PairForce& pf = m_pairs[in.k][in.index];
-        const StiffPair* row = m_row_stiff[in.k].data();
-        for (int t = pf.stiff_begin; t < pf.stiff_end; ++t)
-          m_stiff_in[at++] = {row + t, m_stiff_offset[in.k] + t};
-      }
-    }
-  });
 }
 
 void ContactTerm::set_operator_stiffness(bool on) {
@@ -671,8 +643,6 @@ void ContactTerm::set_operator_stiffness(bool on) {
     for (auto& row : m_row_si) row.clear();
     for (auto& row : m_row_sj) row.clear();
     m_stiff_offset.clear();
-    m_stiff_in_offset.clear();
-    m_stiff_in.clear();
   }
 }
 
@@ -698,11 +668,16 @@ void ContactTerm::segment_product(int s, Force&& force, Vector12d& slot) const {
     const std::array<double, 4>& ba = m_basis[own[t].a];
     for (int c = 0; c < 4; ++c) slot.segment<3>(3 * c) -= ba[c] * f;
   }
-  for (int q = m_stiff_in_offset[s]; q < m_stiff_in_offset[s + 1]; ++q) {
-    const StiffIn& in = m_stiff_in[q];
-    const Eigen::Vector3d f = force(-1, *in.pair, in.index);
-    const std::array<double, 4>& bb = m_basis[in.pair->b];
-    for (int c = 0; c < 4; ++c) slot.segment<3>(3 * c) += bb[c] * f;
+  // the incoming segment pairs in ascending row k, each one run of row k's point pairs
+  for (int q = m_incoming_offset[s]; q < m_incoming_offset[s + 1]; ++q) {
+    const Incoming& in = m_incoming[q];
+    const PairForce& pf = m_pairs[in.k][in.index];
+    const std::vector<StiffPair>& row = m_row_stiff[in.k];
+    for (int t = pf.stiff_begin; t < pf.stiff_end; ++t) {
+      const Eigen::Vector3d f = force(in.k, row[t], m_stiff_offset[in.k] + t);
+      const std::array<double, 4>& bb = m_basis[row[t].b];
+      for (int c = 0; c < 4; ++c) slot.segment<3>(3 * c) += bb[c] * f;
+    }
   }
 }
 
@@ -744,17 +719,8 @@ void ContactTerm::add_stiffness_product_rows(const Model& model, const Eigen::Ve
   if (!m_stiffness) return;
   const int rows = std::min<int>(m_num_seg, static_cast<int>(m_stiff_offset.size()) - 1);
   if (rows <= 0) return;
-  // as add_stiffness_product, each listed segment's pairs taken afresh (a few segments);
-  // the row (segment i) that owns pair k: the last i with m_stiff_offset[i] <= k
-  auto owner = [&](int k) {
-    return static_cast<int>(
-               std::upper_bound(m_stiff_offset.begin(), m_stiff_offset.begin() + rows + 1, k) -
-               m_stiff_offset.begin()) -
-           1;
-  };
-  // (row: the owner when known, else −1)
-  auto force = [&](int row, const StiffPair& p, int k) {
-    if (row < 0) row = owner(k);
+  // as add_stiffness_product, each listed segment's pairs taken afresh (a few segments)
+  auto force = [&](int row, const StiffPair& p, int) {
     return pair_product(p, x.data() + 3 * model.seg_cp[row], x.data() + 3 * model.seg_cp[p.j]);
   };
   for (int s : segments) {

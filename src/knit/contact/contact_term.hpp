@@ -212,8 +212,8 @@ class ContactTerm : public Term {
   // points xi (segment i's, the row that owns p) and xj
   Eigen::Vector3d pair_product(const StiffPair& p, const double* xi, const double* xj) const;
   // segment s's 12 entries of K x from each point pair's force(row, pair, number) (row: the
-  // pair's owner, or −1 where not at hand): its own row's pairs (it is i), then the pairs
-  // of rows k < s that have it as j, in ascending k
+  // segment that owns the pair): its own row's pairs (it is i), then the pairs of rows
+  // k < s that have it as j, in ascending k
   template <class Force>
   void segment_product(int s, Force&& force, Vector12d& slot) const;
   void tabulate_points(const Model& model, const Eigen::VectorXd& q, const Eigen::VectorXd& v);
@@ -264,16 +264,8 @@ class ContactTerm : public Term {
   std::vector<Incoming> m_incoming;
   std::vector<int> m_incoming_offset, m_incoming_fill;
   // with m_stiffness, the rows' point pairs stay in m_row_stiff; row i's are numbered
-  // [m_stiff_offset[i], m_stiff_offset[i + 1]) (the index of their products), and per
-  // segment s those that have it as j are listed in ascending order (rows k < s in
-  // ascending k) at [m_stiff_in_offset[s], …[s + 1]): the operator's products visit them
-  // in this fixed order
-  struct StiffIn {
-    const StiffPair* pair = nullptr;  // in m_row_stiff[k]
-    int index = 0;                    // its number
-  };
-  std::vector<int> m_stiff_offset, m_stiff_in_offset;
-  std::vector<StiffIn> m_stiff_in;
+  // [m_stiff_offset[i], m_stiff_offset[i + 1]) (the index of their products)
+  std::vector<int> m_stiff_offset;
   mutable std::vector<Eigen::Vector3d> m_stiff_product;  // per point pair: H (J x) (dyn)
   std::vector<RowStats> m_rows;
   std::vector<std::vector<ContactPointPair>> m_row_records;
