@@ -269,7 +269,27 @@ TEST(SheetAssembly, CachedPatternAssemblyMatchesTriplets) {
     EXPECT_LT(Eigen::MatrixXd(a.dfdv - b.dfdv).cwiseAbs().maxCoeff(),
               1e-13 * Eigen::MatrixXd(b.dfdv).cwiseAbs().maxCoeff());
     EXPECT_EQ(a.force, b.force);
+    // evaluated into the matrices of an earlier evaluation (another state, or none asked
+    // for), which it reuses: the same as a fresh one
+    for (Jacobians before : {kind, Jacobians::NONE}) {
+      SheetForces reused;
+      evaluate_forces(mesh, test_material(), mesh.rest_positions(), 2 * v, {1, 0, 0}, before,
+                      reused);
+      evaluate_forces(mesh, test_material(), x, v, {0, 0, -9.81}, kind, reused);
+      EXPECT_EQ(reused.force, a.force);
+      EXPECT_EQ(reused.energy(), a.energy());
+      EXPECT_EQ(reused.bend_energy, a.bend_energy);
+      EXPECT_EQ(Eigen::MatrixXd(reused.dfdx), Eigen::MatrixXd(a.dfdx));
+      EXPECT_EQ(Eigen::MatrixXd(reused.dfdv), Eigen::MatrixXd(a.dfdv));
+    }
   }
+  SheetForces none;  // and NONE leaves no matrices behind
+  evaluate_forces(mesh, test_material(), mesh.rest_positions(), mesh.rest_positions(), {0, 0, 0},
+                  Jacobians::PSD, none);
+  evaluate_forces(mesh, test_material(), mesh.rest_positions(), mesh.rest_positions(), {0, 0, 0},
+                  Jacobians::NONE, none);
+  EXPECT_EQ(none.dfdx.nonZeros(), 0);
+  EXPECT_EQ(none.dfdv.nonZeros(), 0);
 }
 
 TEST(SheetAssembly, RestMeshHasZeroEnergyAndForce) {

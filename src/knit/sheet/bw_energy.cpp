@@ -1,6 +1,7 @@
 #include "knit/sheet/bw_energy.hpp"
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
@@ -209,6 +210,14 @@ double bend_energy(const Vector12d& x, double rest_angle, double k, Vector12d* g
 SheetForces evaluate_forces(const SheetMesh& mesh, const SheetMaterial& material,
                             const Eigen::VectorXd& x, const Eigen::VectorXd& v,
                             const Eigen::Vector3d& gravity, Jacobians jacobians) {
+  SheetForces out;
+  evaluate_forces(mesh, material, x, v, gravity, jacobians, out);
+  return out;
+}
+
+void evaluate_forces(const SheetMesh& mesh, const SheetMaterial& material, const Eigen::VectorXd& x,
+                     const Eigen::VectorXd& v, const Eigen::Vector3d& gravity, Jacobians jacobians,
+                     SheetForces& out) {
   const int n = mesh.num_nodes();
   check_size(x, n, "positions");
   check_size(v, n, "velocities");
@@ -218,8 +227,9 @@ SheetForces evaluate_forces(const SheetMesh& mesh, const SheetMaterial& material
   // shear ones are cheap, and the PSD stretch Hessian uses its curvature
   const bool bend_curvature = jacobians == Jacobians::EXACT;
 
-  SheetForces out;
-  out.force = Eigen::VectorXd::Zero(3 * n);
+  out.elastic_energy = out.stretch_energy = out.shear_energy = out.bend_energy = 0;
+  out.gravity_energy = 0;
+  out.force.setZero(3 * n);
   // with the mesh's cached pattern the blocks go straight into the matrices' values
   const bool cached = mesh.jacobian_pattern.rows() == 3 * n &&
                       mesh.jacobian_pattern.isCompressed() &&
@@ -227,9 +237,23 @@ SheetForces evaluate_forces(const SheetMesh& mesh, const SheetMaterial& material
                       mesh.hinge_slots.size() == mesh.hinges.size();
   std::vector<Eigen::Triplet<double>> kt, dt;
   if (jac && cached) {
-    out.dfdx = mesh.jacobian_pattern;
-    out.dfdv = mesh.jacobian_pattern;
-  } else if (jac) {
+    // the matrices of an earlier evaluation on this mesh keep their storage: zeroed, not
+    // copied (a solver's loop then allocates nothing)
+    for (Eigen::SparseMatrix<double>* m : {&out.dfdx, &out.dfdv}) {
+      if (m->rows() == 3 * n && m->isCompressed() &&
+          m->nonZeros() == mesh.jacobian_pattern.nonZeros() &&
+          std::equal(m->innerIndexPtr(), m->innerIndexPtr() + m->nonZeros(),
+                     mesh.jacobian_pattern.innerIndexPtr()) &&
+          std::equal(m->outerIndexPtr(), m->outerIndexPtr() + m->outerSize() + 1,
+                     mesh.jacobian_pattern.outerIndexPtr()))
+        std::fill(m->valuePtr(), m->valuePtr() + m->nonZeros(), 0.0);
+      else
+        *m = mesh.jacobian_pattern;
+    }
+  } else if (!jac) {
+    out.dfdx.resize(0, 0);  // none asked for: none left from an earlier evaluation
+    out.dfdv.resize(0, 0);
+  } else {
     kt.reserve(81 * mesh.triangles.size() + 144 * mesh.hinges.size());
     dt.reserve(kt.capacity());
   }
@@ -292,7 +316,6 @@ SheetForces evaluate_forces(const SheetMesh& mesh, const SheetMaterial& material
     out.dfdv.resize(3 * n, 3 * n);
     out.dfdv.setFromTriplets(dt.begin(), dt.end());
   }
-  return out;
 }
 
 double potential_energy(const SheetMesh& mesh, const SheetMaterial& material,

@@ -160,6 +160,12 @@ SheetForces evaluate_forces(const SheetMesh& mesh, const SheetMaterial& material
                             const Eigen::Vector3d& gravity = Eigen::Vector3d(0, 0, -981),
                             Jacobians jacobians = Jacobians::PSD);
 
+/// The same into `out`, reusing the storage of its matrices when they hold the mesh's
+/// cached pattern from an earlier evaluation (an iterative solver's loop allocates nothing).
+void evaluate_forces(const SheetMesh& mesh, const SheetMaterial& material, const Eigen::VectorXd& x,
+                     const Eigen::VectorXd& v, const Eigen::Vector3d& gravity, Jacobians jacobians,
+                     SheetForces& out);
+
 /// Potential energy (elastic + gravity, erg) alone, for line searches.
 double potential_energy(const SheetMesh& mesh, const SheetMaterial& material,
                         const Eigen::VectorXd& x,

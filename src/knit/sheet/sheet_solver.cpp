@@ -2,7 +2,9 @@
 
 #include <Eigen/IterativeLinearSolvers>
 #include <Eigen/SparseCholesky>
+#include <algorithm>
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -56,6 +58,64 @@ Eigen::SparseMatrix<double> restrict_matrix(const Eigen::SparseMatrix<double>& a
   r.setFromTriplets(t.begin(), t.end());
   return r;
 }
+
+// The free rows and columns of matrices that share one pattern (the sheet's Jacobians), set
+// up once and refilled in place: `matrix` holds the pattern, `source[k]` the index in the
+// full matrix's values of its k-th value (−1: a diagonal entry the full pattern lacks, kept
+// for the regularisation), `diagonal` the indices of its (i, i) entries. The free indices
+// keep the full ones' order, so the restricted entries come in the full matrix's
+// column-major order (its row indices sorted within each column, as Eigen keeps them).
+struct FreeBlock {
+  Eigen::SparseMatrix<double> matrix;
+  std::vector<int> source, diagonal;
+  std::vector<int> full_outer, full_inner;  // the pattern it was set up with
+
+  FreeBlock(const Eigen::SparseMatrix<double>& a, const std::vector<int>& map, int n_free)
+      : full_outer(a.outerIndexPtr(), a.outerIndexPtr() + a.outerSize() + 1),
+        full_inner(a.innerIndexPtr(), a.innerIndexPtr() + a.nonZeros()) {
+    std::vector<int> outer(n_free + 1, 0), inner;
+    for (int col = 0; col < a.outerSize(); ++col) {
+      const int c = map[col];
+      if (c < 0) continue;
+      bool has_diagonal = false;
+      auto add = [&](int row, int src) {
+        if (row == c) {
+          diagonal.push_back(static_cast<int>(inner.size()));
+          has_diagonal = true;
+        }
+        inner.push_back(row);
+        source.push_back(src);
+      };
+      for (int k = full_outer[col]; k < full_outer[col + 1]; ++k) {
+        const int row = map[full_inner[k]];
+        if (row < 0) continue;
+        if (!has_diagonal && row > c) add(c, -1);
+        add(row, k);
+      }
+      if (!has_diagonal) add(c, -1);
+      outer[c + 1] = static_cast<int>(inner.size());
+    }
+    std::vector<double> values(inner.size(), 0.0);
+    matrix = Eigen::Map<const Eigen::SparseMatrix<double>>(
+        n_free, n_free, static_cast<Eigen::Index>(inner.size()), outer.data(), inner.data(),
+        values.data());
+  }
+  // a has the pattern this was set up with
+  bool matches(const Eigen::SparseMatrix<double>& a) const {
+    return a.isCompressed() && a.outerSize() + 1 == static_cast<Eigen::Index>(full_outer.size()) &&
+           a.nonZeros() == static_cast<Eigen::Index>(full_inner.size()) &&
+           std::equal(full_outer.begin(), full_outer.end(), a.outerIndexPtr()) &&
+           std::equal(full_inner.begin(), full_inner.end(), a.innerIndexPtr());
+  }
+  // matrix ← scale · a restricted, plus mu on the diagonal
+  void fill(const Eigen::SparseMatrix<double>& a, double scale, double mu) {
+    double* v = matrix.valuePtr();
+    const double* src = a.valuePtr();
+    for (size_t k = 0; k < source.size(); ++k) v[k] = source[k] < 0 ? 0.0 : scale * src[source[k]];
+    if (mu > 0)
+      for (int k : diagonal) v[k] += mu;
+  }
+};
 
 Eigen::VectorXd restrict_vector(const Eigen::VectorXd& v, const std::vector<int>& map, int n_free) {
   Eigen::VectorXd r(n_free);
@@ -202,6 +262,8 @@ StaticReport solve_static(const SheetMesh& mesh, const SheetMaterial& material,
   Eigen::VectorXd x = state.positions;
   StaticReport report;
   double start_residual = -1;
+  std::optional<FreeBlock> block;
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt;
   SheetForces f = evaluate_forces(mesh, material, x, zero_v, g, Jacobians::PSD);
   for (;;) {
     const double residual = max_abs_free(f.force, map);
@@ -215,19 +277,20 @@ StaticReport solve_static(const SheetMesh& mesh, const SheetMaterial& material,
     if (report.iterations >= settings.max_iterations) break;
     ++report.iterations;
 
-    // Newton direction on the free DOFs: H d = f, H = −∂f/∂x (PSD)
-    const Eigen::SparseMatrix<double> hff = restrict_matrix(-f.dfdx, map, n_free);
+    // Newton direction on the free DOFs: H d = f, H = −∂f/∂x (PSD). The pattern is the
+    // same every iteration: its free block and the factorisation's ordering are set up once
+    if (!block || !block->matches(f.dfdx)) {
+      block.emplace(f.dfdx, map, n_free);
+      ldlt.analyzePattern(block->matrix);
+    }
     const Eigen::VectorXd ff = restrict_vector(f.force, map, n_free);
     Eigen::VectorXd d;
-    const double diag = hff.diagonal().cwiseAbs().maxCoeff();
+    block->fill(f.dfdx, -1, 0);
+    const double diag = block->matrix.diagonal().cwiseAbs().maxCoeff();
     bool ok = false;
-    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt;
-    ldlt.analyzePattern(hff);
     for (double mu = 0; mu < 1e3 * diag; mu = (mu == 0 ? 1e-10 * diag : 100 * mu)) {
-      Eigen::SparseMatrix<double> reg = hff;
-      if (mu > 0)
-        for (int k = 0; k < n_free; ++k) reg.coeffRef(k, k) += mu;
-      ldlt.factorize(reg);
+      if (mu > 0) block->fill(f.dfdx, -1, mu);
+      ldlt.factorize(block->matrix);
       if (ldlt.info() != Eigen::Success) continue;
       d = ldlt.solve(ff);
       if (d.allFinite() && d.dot(ff) > 0 && (ldlt.vectorD().array() > 0).all()) {
@@ -259,7 +322,7 @@ StaticReport solve_static(const SheetMesh& mesh, const SheetMaterial& material,
       }
     }
     if (!accepted) break;
-    f = evaluate_forces(mesh, material, x, zero_v, g, Jacobians::PSD);
+    evaluate_forces(mesh, material, x, zero_v, g, Jacobians::PSD, f);
   }
   report.energy = f.energy();
   report.reactions = sum_per_constraint(constraints, -f.force);
