@@ -404,30 +404,48 @@ SheetFit fit_sheet_material(const std::string& kstate_path, const std::vector<st
       m.k_shear = ks_;
       return sheet_stiffness(ks, g, m, t.strain);
     };
-    // bracket from below, a decade at a time (a sheet far stiffer in shear than in stretch
-    // converges slowly, so the bracket stops at the first decade that is stiff enough)
+    // bracket a decade at a time from shear as stiff as stretch, downward or upward: a
+    // sheet far softer in shear than in stretch converges slowly (Gauss–Newton), and at a
+    // ten-thousandth of the stretch stiffness a 42×32 one did not converge at all, so the
+    // soft end is visited only when the answer lies there
     const double floor_k = 1e-4 * std::min(m.k_stretch_u, m.k_stretch_v),
                  ceiling_k = 1e2 * std::max(m.k_stretch_u, m.k_stretch_v);
-    double lo = floor_k, hi = floor_k;
-    nlohmann::json note;
-    if (stiffness(lo) >= t.stiffness) {
-      note = "the yarn model's bias stiffness is below the sheet's with almost no shear stiffness";
-      m.k_shear = lo;
+    double lo = std::max(m.k_stretch_u, m.k_stretch_v), hi = lo;
+    bool below = false, above = false;
+    if (stiffness(hi) >= t.stiffness) {
+      for (;;) {  // downward until [lo, hi] brackets it
+        if (lo / 10 < floor_k) {
+          below = true;
+          break;
+        }
+        hi = lo;
+        lo /= 10;
+        if (stiffness(lo) < t.stiffness) break;
+      }
     } else {
-      while (hi < ceiling_k && stiffness(hi) < t.stiffness) {
+      for (;;) {  // upward
+        if (hi * 10 > ceiling_k) {
+          above = true;
+          break;
+        }
         lo = hi;
         hi *= 10;
+        if (stiffness(hi) >= t.stiffness) break;
       }
-      if (hi >= ceiling_k) {
-        m.k_shear = ceiling_k;
-        note = "the yarn model's bias stiffness is above the sheet's with the stiffest shear tried";
-      } else {
-        for (int i = 0; i < 60 && hi / lo > 1 + 1e-4; ++i) {
-          const double mid = std::sqrt(lo * hi);
-          (stiffness(mid) < t.stiffness ? lo : hi) = mid;
-        }
-        m.k_shear = std::sqrt(lo * hi);
+    }
+    nlohmann::json note;
+    if (below) {
+      note = "the yarn model's bias stiffness is below the sheet's with almost no shear stiffness";
+      m.k_shear = lo;
+    } else if (above) {
+      m.k_shear = hi;
+      note = "the yarn model's bias stiffness is above the sheet's with the stiffest shear tried";
+    } else {
+      for (int i = 0; i < 60 && hi / lo > 1 + 1e-4; ++i) {
+        const double mid = std::sqrt(lo * hi);
+        (stiffness(mid) < t.stiffness ? lo : hi) = mid;
       }
+      m.k_shear = std::sqrt(lo * hi);
     }
     fit.material.k_shear = m.k_shear;
     fit.report["bias"] = {{"run", t.run},
