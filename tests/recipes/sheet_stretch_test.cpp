@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <csignal>
 #include <filesystem>
 #include <fstream>
@@ -106,6 +107,25 @@ TEST(SheetStretch, ItsStiffnessesFitTheYarnModelsRuns) {
     SCOPED_TRACE(d);
     ASSERT_TRUE(fit.report.contains(d)) << fit.report.dump(2);
     EXPECT_NEAR(fit.report[d]["sheet_stiffness"].get<double>(), k, 2e-3 * k);
+  }
+  // the shear bracket searches from shear as stiff as stretch: a bias target that needs
+  // stiffer shear than that and one that needs a hundredth of it are fitted too
+  for (double bias : {7500.0, 1000.0}) {
+    SCOPED_TRACE(bias);
+    std::ofstream(root / "bias" / "summary.json")
+        << nlohmann::json({{"model", "yarn"},
+                           {"direction", "bias"},
+                           {"to_strain", 0.2},
+                           {"clamp_stitches", 2},
+                           {"stretch", {{"stiffness_small_strain", bias}}}})
+               .dump();
+    const SheetFit f = fit_sheet_material(relaxed_sample(), runs, base);
+    EXPECT_NEAR(f.report["bias"]["sheet_stiffness"].get<double>(), bias, 2e-3 * bias);
+    const double k_stretch = std::max(f.material.k_stretch_u, f.material.k_stretch_v);
+    if (bias > 5000)
+      EXPECT_GT(f.material.k_shear, k_stretch);
+    else
+      EXPECT_LT(f.material.k_shear, k_stretch / 10);
   }
   // a sheet run with the fitted material has the yarn model's small-strain stiffness
   SheetStretchOptions o = base;
