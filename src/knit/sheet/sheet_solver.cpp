@@ -59,20 +59,22 @@ Eigen::SparseMatrix<double> restrict_matrix(const Eigen::SparseMatrix<double>& a
   return r;
 }
 
-// The free rows and columns of matrices that share one pattern (the sheet's Jacobians), set
-// up once and refilled in place: `matrix` holds the pattern, `source[k]` the index in the
-// full matrix's values of its k-th value (−1: a diagonal entry the full pattern lacks, kept
-// for the regularisation), `diagonal` the indices of its (i, i) entries. The free indices
-// keep the full ones' order, so the restricted entries come in the full matrix's
-// column-major order (its row indices sorted within each column, as Eigen keeps them).
+// The free rows and columns of matrices that share one pattern (the sheet's Jacobians, whose
+// pattern is the mesh's), set up once and refilled in place: `matrix` holds the pattern,
+// `source[k]` the index in the full matrix's values of its k-th value (−1: a diagonal entry
+// the full pattern lacks, kept for the regularisation), `diagonal` the indices of its (i, i)
+// entries. The free indices keep the full ones' order, so the restricted entries come in the
+// full matrix's column-major order (its row indices sorted within each column, as Eigen
+// keeps them).
 struct FreeBlock {
   Eigen::SparseMatrix<double> matrix;
   std::vector<int> source, diagonal;
-  std::vector<int> full_outer, full_inner;  // the pattern it was set up with
+  Eigen::Index full_nonzeros = 0;
 
   FreeBlock(const Eigen::SparseMatrix<double>& a, const std::vector<int>& map, int n_free)
-      : full_outer(a.outerIndexPtr(), a.outerIndexPtr() + a.outerSize() + 1),
-        full_inner(a.innerIndexPtr(), a.innerIndexPtr() + a.nonZeros()) {
+      : full_nonzeros(a.nonZeros()) {
+    const int* full_outer = a.outerIndexPtr();
+    const int* full_inner = a.innerIndexPtr();
     std::vector<int> outer(n_free + 1, 0), inner;
     for (int col = 0; col < a.outerSize(); ++col) {
       const int c = map[col];
@@ -99,13 +101,6 @@ struct FreeBlock {
     matrix = Eigen::Map<const Eigen::SparseMatrix<double>>(
         n_free, n_free, static_cast<Eigen::Index>(inner.size()), outer.data(), inner.data(),
         values.data());
-  }
-  // a has the pattern this was set up with
-  bool matches(const Eigen::SparseMatrix<double>& a) const {
-    return a.isCompressed() && a.outerSize() + 1 == static_cast<Eigen::Index>(full_outer.size()) &&
-           a.nonZeros() == static_cast<Eigen::Index>(full_inner.size()) &&
-           std::equal(full_outer.begin(), full_outer.end(), a.outerIndexPtr()) &&
-           std::equal(full_inner.begin(), full_inner.end(), a.innerIndexPtr());
   }
   // matrix ← scale · a restricted, plus mu on the diagonal
   void fill(const Eigen::SparseMatrix<double>& a, double scale, double mu) {
@@ -278,8 +273,10 @@ StaticReport solve_static(const SheetMesh& mesh, const SheetMaterial& material,
     ++report.iterations;
 
     // Newton direction on the free DOFs: H d = f, H = −∂f/∂x (PSD). The pattern is the
-    // same every iteration: its free block and the factorisation's ordering are set up once
-    if (!block || !block->matches(f.dfdx)) {
+    // mesh's every iteration: its free block and the factorisation's ordering are set up once
+    if (!f.dfdx.isCompressed() || (block && f.dfdx.nonZeros() != block->full_nonzeros))
+      throw std::logic_error("solve_static: the sheet's Jacobian changed its pattern");
+    if (!block) {
       block.emplace(f.dfdx, map, n_free);
       ldlt.analyzePattern(block->matrix);
     }
