@@ -24,6 +24,7 @@ void register_relax(CLI::App& app) {
     knit::Material material = knit::relax_knit_params().material;
     int contact_points = knit::relax_knit_params().discretisation.contact_points;
     double time_step = knit::relax_knit_params().solver.time_step;
+    double contact_reuse = 0;
     double shrink = knit::RELAX_SHRINK;
     int threads = 0;
     bool quiet = false, no_frames = false, overwrite = false, fire = false;
@@ -90,6 +91,7 @@ void register_relax(CLI::App& app) {
          "s (default 1/11800; 1/25000 with --from: imported swatches start tightly packed)")
       ->check(finite_range(knit::param_range("time_step").min, knit::param_range("time_step").max));
   add_integrator_option(cmd, o->integrator);
+  add_contact_reuse_option(cmd, o->contact_reuse);
   cmd->add_option("--max-time", o->run.max_time,
                   "simulated seconds at most (with --resume: seconds more)")
       ->check(finite_positive(knit::MAX_DURATION));
@@ -168,6 +170,7 @@ void register_relax(CLI::App& app) {
       if (given("--alpha-large")) p.material.alpha_large = o->material.alpha_large;
       if (given("--time-step")) p.solver.time_step = o->time_step;
       p.solver.integrator = knit::parse_integrator(o->integrator);
+      p.solver.contact_reuse = o->contact_reuse;
       p.discretisation.contact_points = o->contact_points;
       o->yarns.shrink = o->shrink;
       o->yarns.run = o->run;
@@ -179,6 +182,7 @@ void register_relax(CLI::App& app) {
       p.discretisation.contact_points = o->contact_points;
       p.solver.time_step = o->time_step;
       p.solver.integrator = knit::parse_integrator(o->integrator);
+      p.solver.contact_reuse = o->contact_reuse;
       o->knit.shrink = o->shrink;
       o->knit.fire = o->fire;
       o->knit.run = o->run;

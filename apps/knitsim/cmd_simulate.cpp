@@ -18,7 +18,7 @@ void register_simulate(CLI::App& app) {
     double duration = 0;
     bool quiet = false, overwrite = false, implicit_bending = false;
     std::string export_format, integrator;
-    double time_step = 0, contact_solve_tolerance = 0;
+    double time_step = 0, contact_solve_tolerance = 0, contact_reuse = 0;
     int output_every = 0;
   };
   auto opts = std::make_shared<Opts>();
@@ -50,6 +50,7 @@ void register_simulate(CLI::App& app) {
                   "time; docs/model.md §5.2); overrides the scene's contact_solve_tolerance")
       ->check(finite_range(knit::param_range("contact_solve_tolerance").min,
                            knit::param_range("contact_solve_tolerance").max));
+  add_contact_reuse_option(cmd, opts->contact_reuse);
   cmd->add_option("--output-every", opts->output_every,
                   "override the scene's steps between written states and log rows")
       ->check(CLI::Range(1, 1'000'000'000));
@@ -65,6 +66,8 @@ void register_simulate(CLI::App& app) {
     if (opts->implicit_bending) scene.model.params.solver.implicit_bending = true;
     if (cmd->count("--contact-solve-tolerance"))
       scene.model.params.solver.contact_solve_tolerance = opts->contact_solve_tolerance;
+    if (cmd->count("--contact-reuse"))
+      scene.model.params.solver.contact_reuse = opts->contact_reuse;
     if (cmd->count("--output-every")) scene.output_every = opts->output_every;
     if (cmd->count("--duration")) {
       knit::check_duration(opts->duration, scene.model.params.solver.time_step);

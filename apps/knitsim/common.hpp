@@ -35,6 +35,8 @@ CLI::Validator finite_positive(double hi = 1e300);
 void add_integrator_option(CLI::App* cmd, std::string& integrator);
 /// --implicit-bending (knit::SolverSettings::implicit_bending), into `implicit_bending`.
 void add_implicit_bending_option(CLI::App* cmd, bool& implicit_bending);
+/// --contact-reuse (SolverSettings::contact_reuse, yarn radii).
+void add_contact_reuse_option(CLI::App* cmd, double& reuse);
 
 /// Adds --threads N (0 = all cores).
 void add_threads_option(CLI::App* cmd, int& threads);

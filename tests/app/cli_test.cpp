@@ -219,6 +219,34 @@ TEST(Cli, RelaxFireRestsByTheForceResidual) {
   }
 }
 
+// `relax --contact-reuse` reuses contact's linearisation (imex-contact): the summary says in
+// how many steps; with another integrator, or out of range, it is refused by name before
+// anything is written.
+TEST(Cli, RelaxTakesTheContactReuse) {
+  const std::string out = temp_dir("cli_relax_reuse");
+  const Result r =
+      run("relax garter --rows 3 --cols 3 --fire --integrator imex-contact --time-step 6e-4 "
+          "--contact-reuse 0.05 --max-time 0.3 --check-every 25 --quiet --no-frames --out " +
+          out);
+  ASSERT_EQ(r.code, 0) << r.output;
+  std::ifstream in(out + "/summary.json");
+  const auto s = nlohmann::json::parse(in);
+  EXPECT_EQ(s["params"]["solver"]["contact_reuse"].get<double>(), 0.05);
+  EXPECT_GT(s["contact_linearised_fraction"].get<double>(), 0.0);
+  EXPECT_GT(s["matrix_kept_fraction"].get<double>(), 0.0);
+  const Result other =
+      run("relax garter --integrator imex --contact-reuse 0.05 --out " + out + "_imex");
+  EXPECT_NE(other.code, 0);
+  EXPECT_NE(other.output.find("contact_reuse"), std::string::npos) << other.output;
+  EXPECT_NE(other.output.find("imex-contact"), std::string::npos) << other.output;
+  EXPECT_FALSE(fs::exists(out + "_imex"));
+  const Result range =
+      run("relax garter --integrator imex-contact --contact-reuse 2 --out " + out + "_range");
+  EXPECT_NE(range.code, 0);
+  EXPECT_NE(range.output.find("--contact-reuse"), std::string::npos) << range.output;
+  EXPECT_FALSE(fs::exists(out + "_range"));
+}
+
 // A relaxation stopped and resumed (--resume) follows the same path as one that ran on:
 // the state file holds positions, velocities and time, and the glues go on closing.
 TEST(Cli, ResumedRelaxationContinuesTheSamePath) {

@@ -614,3 +614,141 @@ TEST(ContactTerm, StiffnessProductWithTheEvaluationsVelocityIsFormedByTheKernels
 
 }  // namespace
 }  // namespace knit
+
+namespace knit {
+namespace {
+
+// Reuse (SolverSettings::contact_reuse): within reach of the last exact evaluation the
+// force is its first-order model. Where the perturbation leaves the set of point pairs in
+// contact as it was (no pair crosses d = 1, where the force's derivative jumps), the
+// model's error is of second order: halving the perturbation quarters it. It also captures
+// nearly all of the force's change (the exact Hessian, the damping at the new velocity),
+// and its energy's error is of third order. (The linearisation starts from rest: the
+// damping force is taken with the normals of its point, an error of the order of the
+// motion times the velocity.) Beyond reach, and after refresh(), the evaluation is exact.
+TEST(ContactTerm, ReusedLinearisationIsSecondOrderAccurate) {
+  Params p;
+  p.solver.integrator = Integrator::IMEX_CONTACT;
+  p.solver.contact_reuse = 1.0;
+  const Sample s = make(knit_like_sample(2, 2, 8, 0.125, 0.8), p);
+  const Model& m = s.model;
+  const double r = m.params.material.radius;
+  const int n = static_cast<int>(s.q.size());
+  const Eigen::VectorXd v0 = Eigen::VectorXd::Zero(n);
+  Eigen::VectorXd dq = random_vector(n, 1.0, 22);
+  double largest = 0;
+  for (int k = 0; k < n; k += 3) largest = std::max(largest, dq.segment<3>(k).norm());
+  dq /= largest;  // the largest control point's move is 1 cm
+  const Eigen::VectorXd dv = random_vector(n, 1.0, 23);
+  // the exact force, energy and point pairs in contact at (q0 + ε dq, v0 + ε dv)
+  auto exact = [&](double eps, double& energy, std::vector<ContactPointPair>* pairs) {
+    Sample moved = s;
+    moved.q += eps * dq;
+    ContactTerm fresh(m);
+    fresh.set_record_point_pairs(true);
+    const Eigen::VectorXd f = force_of(fresh, moved, v0 + eps * dv, &energy);
+    if (pairs) *pairs = fresh.last_point_pairs();
+    return f;
+  };
+  double e0 = 0;
+  std::vector<ContactPointPair> pairs0;
+  const Eigen::VectorXd f0 = exact(0, e0, &pairs0);
+  ASSERT_GT(pairs0.size(), 50u);
+  // the largest ε (a power of 2 of r) whose perturbation, and half of it, keep the pairs
+  double eps = r;
+  for (;; eps /= 2) {
+    ASSERT_GT(eps, 1e-8 * r) << "no perturbation keeps the pairs in contact";
+    std::vector<ContactPointPair> a, b;
+    double unused = 0;
+    exact(eps, unused, &a);
+    exact(eps / 2, unused, &b);
+    if (a == pairs0 && b == pairs0) break;
+  }
+  ContactTerm term(m);
+  term.set_operator_stiffness(true);
+  {
+    Eigen::VectorXd f = Eigen::VectorXd::Zero(n);
+    // (the kernels with the stiffness on round differently from those without)
+    EXPECT_NEAR(term.add_force(m, s.q, v0, 0.0, f), e0, 1e-12 * e0);
+    EXPECT_LT(max_abs(f - f0), 1e-12 * max_abs(f0)) << "its point is evaluated exactly";
+    EXPECT_FALSE(term.last_stats().linearised);
+  }
+  double force_error[2], energy_error[2];
+  for (int k = 0; k < 2; ++k) {
+    const double e = eps / (1 << k);
+    double energy = 0, exact_energy = 0;
+    const Eigen::VectorXd want = exact(e, exact_energy, nullptr);
+    Eigen::VectorXd f = Eigen::VectorXd::Zero(n);
+    const Eigen::VectorXd v = v0 + e * dv;
+    energy = term.add_force(m, s.q + e * dq, v, 0.0, f);
+    ASSERT_TRUE(term.last_stats().linearised);
+    // the stiffness at the linearisation's point: K v, formed on the way, is K (2v) / 2
+    Eigen::VectorXd kv = Eigen::VectorXd::Zero(n), k2v = Eigen::VectorXd::Zero(n);
+    term.add_stiffness_product(m, v, kv);
+    term.add_stiffness_product(m, 2.0 * v, k2v);
+    ASSERT_GT(max_abs(k2v), 0.0);
+    EXPECT_LT(max_abs(kv - 0.5 * k2v), 1e-12 * max_abs(k2v));
+    force_error[k] = max_abs(f - want);
+    energy_error[k] = std::abs(energy - exact_energy);
+    // the model captures the change: its error is a small part of it
+    EXPECT_LT(force_error[k], 1e-2 * max_abs(want - f0)) << "ε = " << e / r << " r";
+    EXPECT_LT(energy_error[k], 1e-2 * std::abs(exact_energy - e0)) << "ε = " << e / r << " r";
+  }
+  EXPECT_EQ(term.linearised_evaluations(), 2);
+  EXPECT_EQ(term.evaluations(), 1);
+  // the segment blocks, kept while reusing, are those of the linearisation's point (asked
+  // twice: formed, then kept)
+  {
+    Params p0 = p;
+    p0.solver.contact_reuse = 0;
+    const Sample plain = make(knit_like_sample(2, 2, 8, 0.125, 0.8), p0);
+    ContactTerm reference(plain.model);
+    reference.set_operator_stiffness(true);
+    force_of(reference, plain, v0);
+    std::vector<Matrix12d> want(m.num_seg(), Matrix12d::Zero());
+    reference.add_operator_segment_stiffness(plain.model, want);
+    for (int pass = 0; pass < 2; ++pass) {
+      std::vector<Matrix12d> blocks(m.num_seg(), Matrix12d::Zero());
+      term.add_operator_segment_stiffness(m, blocks);
+      double worst = 0, scale = 0;
+      for (int i = 0; i < m.num_seg(); ++i) {
+        worst = std::max(worst, max_abs((blocks[i] - want[i]).reshaped()));
+        scale = std::max(scale, max_abs(want[i].reshaped()));
+      }
+      EXPECT_LT(worst, 1e-12 * scale) << "pass " << pass;
+    }
+  }
+  const double force_order = std::log2(force_error[0] / force_error[1]);
+  const double energy_order = std::log2(energy_error[0] / energy_error[1]);
+  EXPECT_NEAR(force_order, 2.0, 0.3) << force_error[0] << " → " << force_error[1];
+  EXPECT_NEAR(energy_order, 3.0, 0.5) << energy_error[0] << " → " << energy_error[1];
+  // beyond reach (1 r): exact, and the new linearisation's point
+  {
+    const Eigen::VectorXd q_far = s.q + 1.5 * r * dq;
+    Eigen::VectorXd f = Eigen::VectorXd::Zero(n), want = Eigen::VectorXd::Zero(n);
+    term.add_force(m, q_far, v0, 0.0, f);
+    EXPECT_FALSE(term.last_stats().linearised);
+    ContactTerm fresh(m);
+    fresh.add_force(m, q_far, v0, 0.0, want);
+    EXPECT_LT(max_abs(f - want), 1e-12 * max_abs(want));
+  }
+  // refresh(): the next evaluation is exact even within reach
+  term.refresh();
+  Eigen::VectorXd f = Eigen::VectorXd::Zero(n);
+  term.add_force(m, s.q + 1.5 * r * dq + 1e-3 * r * dq, v0, 0.0, f);
+  EXPECT_FALSE(term.last_stats().linearised);
+  EXPECT_EQ(term.evaluations(), 3);
+}
+
+// Reuse needs the stiffness that only the imex-contact integrator keeps.
+TEST(ContactTerm, ReuseRejectsIntegratorsWithoutTheContactStiffness) {
+  Params p;
+  p.solver.contact_reuse = 0.05;
+  p.solver.integrator = Integrator::IMEX;
+  EXPECT_THROW(validate_params(p), std::invalid_argument);
+  p.solver.integrator = Integrator::IMEX_CONTACT;
+  EXPECT_NO_THROW(validate_params(p));
+}
+
+}  // namespace
+}  // namespace knit

@@ -90,6 +90,7 @@ void ContactTerm::resize(const Model& model) {
   m_list_box_tests.assign(m_num_seg, 0);
   m_seg_moved.assign(m_num_seg, 0.0);
   m_list_valid = false;
+  m_lin_valid = false;
   m_partners.resize(m_num_seg);
   m_pairs.resize(m_num_seg);
   m_row_kv.resize(m_num_seg);
@@ -114,15 +115,148 @@ double ContactTerm::add_force(const Model& model, const Eigen::VectorXd& q,
                               const Eigen::VectorXd& v, double time, Eigen::VectorXd& force) {
   assert(q.size() == model.num_dof() && force.size() == q.size());
   if (model.num_seg() != m_num_seg || model.contact_quad.size() != m_points) resize(model);
+  const auto t0 = Clock::now();
+  const double reuse = model.params.solver.contact_reuse * model.params.material.radius;
+  const bool reusing = reuse > 0 && m_stiffness && m_culling == ContactCulling::BVH;
+  if (reusing && m_lin_valid && m_lin_model == &model && m_lin_q.size() == q.size()) {
+    // within reach of the last exact evaluation? (the largest control point's move)
+    m_lin_dq = q - m_lin_q;
+    double moved2 = 0;
+    for (Eigen::Index k = 0; k + 2 < m_lin_dq.size(); k += 3)
+      moved2 = std::max(moved2, m_lin_dq.segment<3>(k).squaredNorm());
+    if (moved2 <= reuse * reuse) {
+      m_timings = ContactTimings{};
+      const double energy = add_force_linearised(model, q, v, force);
+      m_stats.linearised = true;
+      ++m_linearised;
+      m_timings.total = seconds_since(t0);
+      return energy;
+    }
+  }
   m_stats = ContactStats{};
   m_timings = ContactTimings{};
   m_point_pairs.clear();
   ++m_evaluations;
   m_radius = model.params.material.radius;
-  const auto t0 = Clock::now();
-  const double energy = m_culling == ContactCulling::BVH ? add_force_bvh(model, q, v, force)
-                                                         : add_force_brute(model, q, v, force);
+  double energy = 0;
+  if (reusing) {
+    // kept as the linearisation's point: the state, the force and the energy
+    m_lin_force.setZero(q.size());
+    energy = add_force_bvh(model, q, v, m_lin_force);
+    force += m_lin_force;
+    m_lin_q = q;
+    if (v.size() == q.size())
+      m_lin_v = v;
+    else
+      m_lin_v.setZero(q.size());
+    m_lin_energy = energy;
+    m_lin_model = &model;
+    m_lin_valid = true;
+    // the kernels' K v₀, kept (add_force_linearised adds K (v − v₀) to it)
+    m_lin_kv_valid = m_kv_valid && v.size() == q.size();
+    if (m_lin_kv_valid) m_lin_kv0 = m_kv;
+    m_block_state.assign(m_num_seg, 0);
+    m_block_cache.resize(60 * static_cast<size_t>(m_num_seg));
+  } else {
+    m_lin_valid = false;
+    energy = m_culling == ContactCulling::BVH ? add_force_bvh(model, q, v, force)
+                                              : add_force_brute(model, q, v, force);
+  }
   m_timings.total = seconds_since(t0);
+  return energy;
+}
+
+double ContactTerm::add_force_linearised(const Model& model, const Eigen::VectorXd& q,
+                                         const Eigen::VectorXd& v, Eigen::VectorXd& force) {
+  // m_lin_dq = q − q₀ (add_force); the velocity's change, a missing v read as rest
+  const bool damp = model.params.material.k_dt != 0 || model.params.material.k_dn != 0;
+  if (damp) {
+    if (v.size() == q.size())
+      m_lin_dv = v - m_lin_v;
+    else
+      m_lin_dv = -m_lin_v;
+  }
+  const int rows = std::min<int>(m_num_seg, static_cast<int>(m_stiff_offset.size()) - 1);
+  if (rows <= 0) {
+    force += m_lin_force;
+    return m_lin_energy;
+  }
+  const QuadratureTable& quad = model.contact_quad;
+  const double kdt = model.params.material.k_dt;
+  const double kdiff = model.params.material.k_dt - model.params.material.k_dn;
+  // the stiffness product K v for the step's right-hand side, formed on the way: K v₀ came
+  // from the exact evaluation's kernels, and K (v − v₀) takes w from the damping's pass
+  const bool fuse_kv = damp && v.size() == q.size() && m_lin_kv_valid;
+  m_lin_pair_force.resize(m_stiff_offset[rows]);
+  m_lin_row_energy.assign(m_num_seg, 0.0);
+  // per point pair: u and w the changes of Δ and of Δv, the force change on j
+  //   −H u = −(kn + 2 kt/|Δ|²)(Δ·u) Δ + kt u   (H = k n̂n̂ᵀ − kt (I − n̂n̂ᵀ), the exact
+  //   Hessian: the kernels' kn, kt are the mirrored one's, kn ΔΔᵀ + kt I)
+  // plus damping's −2 ℓℓ ww [k_dt w − (k_dt − k_dn)(Δ·w) Δ/|Δ|²], and the energy change
+  // −F_j⁰·u + ½ uᵀH u with F_j⁰ = kt Δ (the kernels' force on j is g Δ, g = kt)
+  tbb::parallel_for(tbb::blocked_range<int>(0, rows, 16), [&](const tbb::blocked_range<int>& r) {
+    for (int i = r.begin(); i < r.end(); ++i) {
+      const std::vector<StiffPair>& own = m_row_stiff[i];
+      const int ci = model.seg_cp[i];
+      const double li = model.rest_length[i];
+      double energy = 0;
+      for (int t = 0; t < static_cast<int>(own.size()); ++t) {
+        const StiffPair& p = own[t];
+        const int cj = model.seg_cp[p.j];
+        const std::array<double, 4>& ba = m_basis[p.a];
+        const std::array<double, 4>& bb = m_basis[p.b];
+        Eigen::Vector3d u = Eigen::Vector3d::Zero();
+        for (int c = 0; c < 4; ++c)
+          u +=
+              bb[c] * m_lin_dq.segment<3>(3 * (cj + c)) - ba[c] * m_lin_dq.segment<3>(3 * (ci + c));
+        const Eigen::Vector3d delta(p.dx, p.dy, p.dz);
+        const double len2 = delta.squaredNorm();
+        const double kn_exact = p.kn + 2 * p.kt / len2;
+        const double du = delta.dot(u);
+        Eigen::Matrix<double, 3, 2>& out = m_lin_pair_force[m_stiff_offset[i] + t];
+        auto f = out.col(0);
+        f = p.kt * u - (kn_exact * du) * delta;
+        out.col(1).setZero();
+        energy += -p.kt * du + 0.5 * (kn_exact * du * du - p.kt * u.squaredNorm());
+        if (damp) {
+          Eigen::Vector3d w = Eigen::Vector3d::Zero();
+          for (int c = 0; c < 4; ++c)
+            w += bb[c] * m_lin_dv.segment<3>(3 * (cj + c)) -
+                 ba[c] * m_lin_dv.segment<3>(3 * (ci + c));
+          const double c2 = -2.0 * li * model.rest_length[p.j] * quad.w[p.a] * quad.w[p.b];
+          const double dw = delta.dot(w);
+          f += c2 * (kdt * w - (kdiff * dw / len2) * delta);
+          if (fuse_kv) out.col(1) = (p.kn * dw) * delta + p.kt * w;
+        }
+      }
+      m_lin_row_energy[i] = energy;
+    }
+  });
+  // per segment in the fixed order of segment_product (force and K v in one pass)
+  m_product_accumulator.run2(
+      model, m_kv_accumulator, [&](int s, Vector12d& slot, Vector12d& kv_slot) {
+        if (s >= rows) return 0.0;
+        Eigen::Matrix<double, 12, 2> both = Eigen::Matrix<double, 12, 2>::Zero();
+        segment_product(
+            s,
+            [&](int, const StiffPair&, int k) -> const Eigen::Matrix<double, 3, 2>& {
+              return m_lin_pair_force[k];
+            },
+            both);
+        slot = both.col(0);
+        kv_slot = both.col(1);
+        return 0.0;
+      });
+  force += m_lin_force;
+  m_product_accumulator.gather(model, force, 1.0);
+  if (fuse_kv) {
+    m_kv = m_lin_kv0;
+    m_kv_accumulator.gather(model, m_kv, 1.0);
+    m_kv_velocity = v;
+    m_kv_valid = true;
+  }
+  double energy = m_lin_energy;
+  for (double e : m_lin_row_energy) energy += e;
   return energy;
 }
 
@@ -638,6 +772,7 @@ void ContactTerm::set_operator_stiffness(bool on) {
     throw std::logic_error("the contact stiffness operator needs BVH culling");
   m_stiffness = on;
   m_kv_valid = false;
+  m_lin_valid = false;
   if (!on) {
     for (auto& row : m_row_stiff) row.clear();
     for (auto& row : m_row_si) row.clear();
@@ -659,14 +794,14 @@ Eigen::Vector3d ContactTerm::pair_product(const StiffPair& p, const double* xi,
   return (p.kn * delta.dot(uv)) * delta + p.kt * uv;
 }
 
-template <class Force>
-void ContactTerm::segment_product(int s, Force&& force, Vector12d& slot) const {
+template <class Force, class Slot>
+void ContactTerm::segment_product(int s, Force&& force, Slot& slot) const {
   // K x puts B_b f on j's control points and −B_a f on i's
   const std::vector<StiffPair>& own = m_row_stiff[s];
   for (int t = 0; t < static_cast<int>(own.size()); ++t) {
-    const Eigen::Vector3d f = force(s, own[t], m_stiff_offset[s] + t);
+    const auto& f = force(s, own[t], m_stiff_offset[s] + t);
     const std::array<double, 4>& ba = m_basis[own[t].a];
-    for (int c = 0; c < 4; ++c) slot.segment<3>(3 * c) -= ba[c] * f;
+    for (int c = 0; c < 4; ++c) slot.template middleRows<3>(3 * c) -= ba[c] * f;
   }
   // the incoming segment pairs in ascending row k, each one run of row k's point pairs
   for (int q = m_incoming_offset[s]; q < m_incoming_offset[s + 1]; ++q) {
@@ -674,9 +809,9 @@ void ContactTerm::segment_product(int s, Force&& force, Vector12d& slot) const {
     const PairForce& pf = m_pairs[in.k][in.index];
     const std::vector<StiffPair>& row = m_row_stiff[in.k];
     for (int t = pf.stiff_begin; t < pf.stiff_end; ++t) {
-      const Eigen::Vector3d f = force(in.k, row[t], m_stiff_offset[in.k] + t);
+      const auto& f = force(in.k, row[t], m_stiff_offset[in.k] + t);
       const std::array<double, 4>& bb = m_basis[row[t].b];
-      for (int c = 0; c < 4; ++c) slot.segment<3>(3 * c) += bb[c] * f;
+      for (int c = 0; c < 4; ++c) slot.template middleRows<3>(3 * c) += bb[c] * f;
     }
   }
 }
@@ -745,6 +880,31 @@ bool ContactTerm::add_operator_segment_block(const Model& /*model*/, int s,
   if (!m_stiffness) return false;
   const int rows = std::min<int>(m_num_seg, static_cast<int>(m_stiff_offset.size()) - 1);
   if (s >= rows) return false;  // (no evaluation yet)
+  // while a linearisation is reused, every step's factor asks for the same blocks: each is
+  // formed once per exact evaluation and kept
+  double local[10][6];
+  double(*upper)[6] = local;
+  if (m_lin_valid && m_block_state.size() == static_cast<size_t>(m_num_seg)) {
+    upper = reinterpret_cast<double(*)[6]>(m_block_cache.data() + 60 * static_cast<size_t>(s));
+    char& state = m_block_state[s];
+    if (state == 0) state = operator_block_upper(s, upper) ? 2 : 1;
+    if (state == 1) return false;
+  } else if (!operator_block_upper(s, upper)) {
+    return false;
+  }
+  int uv = 0;
+  for (int u = 0; u < 4; ++u)
+    for (int v = u; v < 4; ++v, ++uv) {
+      const double* m = upper[uv];
+      Eigen::Matrix3d sym;
+      sym << m[0], m[1], m[2], m[1], m[3], m[4], m[2], m[4], m[5];
+      block.block<3, 3>(3 * u, 3 * v) += sym;
+      if (v != u) block.block<3, 3>(3 * v, 3 * u) += sym;
+    }
+  return true;
+}
+
+bool ContactTerm::operator_block_upper(int s, double (*upper)[6]) const {
   // Σ_a (b_a b_aᵀ) ⊗ S_a, S_a = Σ over the point pairs at the segment's point a of
   // k n̂n̂ᵀ + kt (I − n̂n̂ᵀ): the kernels summed the 3×3s (6 numbers, symmetric) per point,
   // over its own row and per incoming pair; here those sums are added up, then one
@@ -775,7 +935,7 @@ bool ContactTerm::add_operator_segment_block(const Model& /*model*/, int s,
     }
   }
   if (!any_used) return false;
-  double upper[10][6] = {};  // (u, v ≥ u) in order, each a symmetric 3×3
+  for (int uv = 0; uv < 10; ++uv) std::fill_n(upper[uv], 6, 0.0);
   for (int a = 0; a < m_points; ++a) {
     if (!used[a]) continue;
     const std::array<double, 4>& b = m_basis[a];
@@ -787,15 +947,6 @@ bool ContactTerm::add_operator_segment_block(const Model& /*model*/, int s,
         for (int e = 0; e < 6; ++e) upper[uv][e] += w * m[e];
       }
   }
-  int uv = 0;
-  for (int u = 0; u < 4; ++u)
-    for (int v = u; v < 4; ++v, ++uv) {
-      const double* m = upper[uv];
-      Eigen::Matrix3d sym;
-      sym << m[0], m[1], m[2], m[1], m[3], m[4], m[2], m[4], m[5];
-      block.block<3, 3>(3 * u, 3 * v) += sym;
-      if (v != u) block.block<3, 3>(3 * v, 3 * u) += sym;
-    }
   return true;
 }
 
@@ -807,6 +958,7 @@ void ContactTerm::record(StepData& data) const {
   c.point_pairs_in_contact = m_stats.point_pairs_in_contact;
   c.min_distance_ratio = m_stats.min_distance_ratio;
   c.candidates_rebuilt = m_stats.candidates_rebuilt;
+  c.linearised = m_stats.linearised;
   c.pairs.clear();
   if (m_culling != ContactCulling::BVH) return;
   // row i's pairs go to [offset[i], offset[i + 1]): filled in parallel, in (i, j) order

@@ -69,6 +69,9 @@ struct ContactStats {
   long long box_tests = 0;
   /// whether this evaluation rebuilt the candidate list (BVH culling)
   bool candidates_rebuilt = false;
+  /// whether this evaluation reused the last exact one's linearisation (see
+  /// ContactTerm::add_force); the counts above are then that exact evaluation's
+  bool linearised = false;
 };
 
 /// Wall-clock seconds of the stages of the last evaluation.
@@ -110,8 +113,27 @@ class ContactTerm : public Term {
   /// Adds the contact force −∂E/∂q and the contact damping force −∂D/∂q̇ (dyn) into
   /// `force` and returns the contact energy E (erg). A model with a different number of
   /// segments than the last call gets a fresh BVH.
+  ///
+  /// Reuse (SolverSettings::contact_reuse ρ > 0, with the stiffness operator on). An exact
+  /// evaluation at (q₀, v₀) keeps its force f₀, energy E₀ and per point pair in contact its
+  /// Δ₀ and stiffness. While every control point stays within ρ r of q₀, later evaluations
+  /// run no kernels and return the first-order model around it instead (Kaldor, James and
+  /// Marschner 2010 reuse linearised contact models over many steps), per point pair with
+  /// u = J (q − q₀) and w = J (v − v₀) the changes of Δ and Δv:
+  ///   F_j = F_j⁰ − H u + (damping's force of w with Δ₀'s normal),  F_i = −F_j
+  ///   E = E₀ + Σ (−F_j⁰·u + ½ uᵀH u)
+  /// with H the exact Hessian (ContactHessian::EXACT) of the pair's energy in Δ. The model
+  /// misses pairs that come into contact after q₀ and keeps those that left, whose energy
+  /// and force start from 0 at d = 1 (the force's derivative jumps there, so for such a
+  /// pair the force's error is of first order in how far it crossed); the damping force
+  /// keeps q₀'s normals (an error of the order of the motion times the velocity).
+  /// Elsewhere the error is of second order in the motion. refresh() makes the next
+  /// evaluation exact.
   double add_force(const Model& model, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
                    double time, Eigen::VectorXd& force) override;
+  void refresh() override { m_lin_valid = false; }
+  /// Evaluations that reused a linearisation (not counted in evaluations()).
+  long long linearised_evaluations() const { return m_linearised; }
 
   ContactCulling culling() const { return m_culling; }
   /// The candidate margin δ (cm): candidate segment pairs are found with boxes grown by
@@ -206,6 +228,9 @@ class ContactTerm : public Term {
   };
 
   void resize(const Model& model);
+  // segment s's operator block as its 10 upper 3×3 blocks (u, v ≥ u in order; each
+  // symmetric, xx xy xz yy yz zz); false where it is zero
+  bool operator_block_upper(int s, double (*upper)[6]) const;
   // m_incoming from the kernels' pairs (rows 0 … n − 1)
   void index_incoming_pairs(int n);
   // the stiffness product's force of point pair p, H (J x), from x at its segments' control
@@ -213,9 +238,10 @@ class ContactTerm : public Term {
   Eigen::Vector3d pair_product(const StiffPair& p, const double* xi, const double* xj) const;
   // segment s's 12 entries of K x from each point pair's force(row, pair, number) (row: the
   // segment that owns the pair): its own row's pairs (it is i), then the pairs of rows
-  // k < s that have it as j, in ascending k
-  template <class Force>
-  void segment_product(int s, Force&& force, Vector12d& slot) const;
+  // k < s that have it as j, in ascending k (Slot: Vector12d with a Vector3d per pair, or
+  // 12×2 with a 3×2, two products at once)
+  template <class Force, class Slot>
+  void segment_product(int s, Force&& force, Slot& slot) const;
   void tabulate_points(const Model& model, const Eigen::VectorXd& q, const Eigen::VectorXd& v);
   template <bool DAMP, bool STIFF>
   void pair_kernel(const Model& model, int i, int j, RowStats& row, OwnStiffness& own);
@@ -224,6 +250,9 @@ class ContactTerm : public Term {
                        Eigen::VectorXd& force);
   double add_force_brute(const Model& model, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
                          Eigen::VectorXd& force);
+  // the linearised model of add_force around the last exact evaluation (m_lin_*)
+  double add_force_linearised(const Model& model, const Eigen::VectorXd& q,
+                              const Eigen::VectorXd& v, Eigen::VectorXd& force);
 
   ContactCulling m_culling;
   int m_num_seg = 0;
@@ -286,6 +315,22 @@ class ContactTerm : public Term {
   SegmentAccumulator m_accumulator;
   ContactStats m_stats;
   ContactTimings m_timings;
+  // reuse: the last exact evaluation's state, force and energy (add_force), the change
+  // from it, and per point pair (numbered as m_stiff_offset) the model's force change
+  bool m_lin_valid = false;
+  const Model* m_lin_model = nullptr;
+  Eigen::VectorXd m_lin_q, m_lin_v, m_lin_force, m_lin_dq, m_lin_dv, m_lin_kv0;
+  bool m_lin_kv_valid = false;  // m_lin_kv0 = K v₀ (the kernels formed it)
+  double m_lin_energy = 0;
+  long long m_linearised = 0;
+  // per point pair: the force change on j and, with K v fused, K (v − v₀)'s share
+  std::vector<Eigen::Matrix<double, 3, 2>> m_lin_pair_force;
+  std::vector<double> m_lin_row_energy;
+  // while reusing: per segment its operator block's upper 3×3s (operator_block_upper, 60
+  // numbers), formed on the first request after an exact evaluation (state 0 not yet, 1
+  // zero, 2 kept)
+  mutable std::vector<double> m_block_cache;
+  mutable std::vector<char> m_block_state;
 };
 
 }  // namespace knit

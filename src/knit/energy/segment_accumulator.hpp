@@ -23,6 +23,10 @@ class SegmentAccumulator {
   /// its last segment in the spare lanes, whose results are dropped.
   template <class LaneKernel>
   double run_lanes(const Model& model, const Eigen::VectorXd& q, LaneKernel&& kernel);
+  /// Like run, filling this accumulator's slot and `second`'s in one pass:
+  /// `kernel(segment, slot, second_slot) -> double`, both slots zeroed.
+  template <class Kernel>
+  double run2(const Model& model, SegmentAccumulator& second, Kernel&& kernel);
   /// out[3k..3k+2] += scale · Σ_{segments i touching k} slot_i[control point k − seg_cp_i].
   void gather(const Model& model, Eigen::VectorXd& out, double scale) const;
 
@@ -48,6 +52,25 @@ double SegmentAccumulator::run(const Model& model, Kernel&& kernel) {
     for (int i = r.begin(); i < r.end(); ++i) {
       m_slots[i].setZero();
       m_values[i] = kernel(i, m_slots[i]);
+    }
+  });
+  double sum = 0;
+  for (double e : m_values) sum += e;
+  return sum;
+}
+
+template <class Kernel>
+double SegmentAccumulator::run2(const Model& model, SegmentAccumulator& second, Kernel&& kernel) {
+  const int n = model.num_seg();
+  m_slots.resize(n);
+  m_values.resize(n);
+  second.m_slots.resize(n);
+  second.m_values.assign(n, 0.0);
+  tbb::parallel_for(tbb::blocked_range<int>(0, n, 64), [&](const tbb::blocked_range<int>& r) {
+    for (int i = r.begin(); i < r.end(); ++i) {
+      m_slots[i].setZero();
+      second.m_slots[i].setZero();
+      m_values[i] = kernel(i, m_slots[i], second.m_slots[i]);
     }
   });
   double sum = 0;

@@ -24,6 +24,10 @@ class Term {
   /// step data (the contact term: the contact set and its counters). Called by the
   /// simulator right after the evaluation at a recorded state.
   virtual void record(StepData& data) const {}
+  /// The next add_force is evaluated afresh: a term that reuses an earlier evaluation's
+  /// model of its force (ContactTerm with SolverSettings::contact_reuse) does not reuse
+  /// it. The simulator calls it where a force must be exact (the force residual).
+  virtual void refresh() {}
   /// Number of add_force calls so far (counted by the terms that are costly to evaluate;
   /// -1 when not counted).
   virtual long long evaluations() const { return -1; }

@@ -26,6 +26,7 @@ const std::vector<ParamRange>& param_ranges() {
       {"end_mass_floor", 0, 1, "of an interior control point's mass"},
       {"time_step", 1e-8, 1e-2, "s"},
       {"contact_solve_tolerance", 0, 1, ""},
+      {"contact_reuse", 0, 1, "yarn radii"},
       {"constraint_tolerance", 1e-12, 1, ""},
       {"max_projection_iterations", 1, 10000, ""},
   };
@@ -87,6 +88,11 @@ void validate_params(const Params& p) {
   check_param("end_mass_floor", p.discretisation.end_mass_floor);
   check_param("time_step", p.solver.time_step);
   check_param("contact_solve_tolerance", p.solver.contact_solve_tolerance);
+  check_param("contact_reuse", p.solver.contact_reuse);
+  if (p.solver.contact_reuse > 0 && p.solver.integrator != Integrator::IMEX_CONTACT)
+    throw std::invalid_argument("contact_reuse = " + short_number(p.solver.contact_reuse) +
+                                " needs the imex-contact integrator (its contact stiffness is "
+                                "the linearisation reused)");
   check_param("constraint_tolerance", p.solver.constraint_tolerance);
   check_param("max_projection_iterations", p.solver.max_projection_iterations);
   for (int c = 0; c < 3; ++c)

@@ -79,6 +79,10 @@ struct SolverSettings {
   /// right-hand side); > 0 solves the whole linear system by conjugate gradients until the
   /// residual is this fraction of the right-hand side (docs/model.md §5.2).
   double contact_solve_tolerance = 0;
+  /// With IMEX_CONTACT: > 0 reuses an exact contact evaluation's linearisation while every
+  /// control point stays within this many yarn radii of where it was evaluated
+  /// (ContactTerm::add_force); 0 (the default) evaluates contact afresh every step.
+  double contact_reuse = 0;
   bool length_constraints = true;      ///< enforce C_i = 0 by projection (off in relaxation)
   double constraint_tolerance = 1e-6;  ///< projection stops when max |C| is below (C_len is
                                        ///< dimensionless, pin/glue/clamp rows in cm)

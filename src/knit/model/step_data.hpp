@@ -47,6 +47,9 @@ struct ContactRecord {
   /// smallest d over non-neighbouring point pairs within the contact distance; +inf if none
   double min_distance_ratio = std::numeric_limits<double>::infinity();
   bool candidates_rebuilt = false;
+  /// the state's contact force is the linearised model of an earlier exact evaluation
+  /// (SolverSettings::contact_reuse); the counts and pairs are that evaluation's
+  bool linearised = false;
   std::vector<ContactPairRecord> pairs;  ///< segment pairs in contact, by (seg_i, seg_j)
 };
 
@@ -129,6 +132,8 @@ struct StepData {
   /// relative to the right-hand side (0 and 0 for the other integrators).
   int solve_iterations = 0;
   double solve_residual = 0;
+  /// The IMEX step reused the last step's matrix M + h² K (SolverSettings::contact_reuse).
+  bool matrix_kept = false;
   std::vector<ConstraintRecord> constraints;
   FrictionRecord friction;
   /// wall seconds per stage, summed since the simulator's timings were reset: each term's

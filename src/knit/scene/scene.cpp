@@ -341,6 +341,7 @@ Params parse_params(const JsonReader& r, Params p) {
                 "contact",
                 "constraint_tolerance",
                 "contact_solve_tolerance",
+                "contact_reuse",
                 "max_projection_iterations",
                 "time_step",
                 "integrator",
@@ -383,6 +384,7 @@ Params parse_params(const JsonReader& r, Params p) {
   if (r.has("implicit_bending")) p.solver.implicit_bending = r.at("implicit_bending").boolean();
   if (r.has("contact_solve_tolerance"))
     p.solver.contact_solve_tolerance = r.at("contact_solve_tolerance").positive(true);
+  if (r.has("contact_reuse")) p.solver.contact_reuse = r.at("contact_reuse").positive(true);
   if (r.has("constraint_tolerance"))
     p.solver.constraint_tolerance = r.at("constraint_tolerance").positive();
   if (r.has("max_projection_iterations"))

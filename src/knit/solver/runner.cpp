@@ -134,6 +134,7 @@ nlohmann::json params_json(const Params& p) {
             {"integrator", integrator_name(p.solver.integrator)},
             {"implicit_bending", p.solver.implicit_bending},
             {"contact_solve_tolerance", p.solver.contact_solve_tolerance},
+            {"contact_reuse", p.solver.contact_reuse},
             {"length_constraints", p.solver.length_constraints},
             {"constraint_tolerance", p.solver.constraint_tolerance},
             {"max_projection_iterations", p.solver.max_projection_iterations}}},
@@ -310,7 +311,7 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
   double contact_pairs_sum = 0;
   long long contact_samples = 0;
   // the IMEX_CONTACT step's conjugate-gradient solves
-  long long solve_steps = 0, solve_iterations = 0;
+  long long solve_steps = 0, solve_iterations = 0, contact_linearised = 0, matrix_kept = 0;
   int solve_iterations_max = 0;
   double solve_residual_max = 0;
   double min_d = std::numeric_limits<double>::infinity();
@@ -403,7 +404,9 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
       contact_pairs_sum += static_cast<double>(data.contact.point_pairs_in_contact);
       ++contact_samples;
       min_d = std::min(min_d, data.contact.min_distance_ratio);
+      contact_linearised += data.contact.linearised;
     }
+    matrix_kept += data.matrix_kept;
     if (data.solve_iterations > 0) {
       ++solve_steps;
       solve_iterations += data.solve_iterations;
@@ -517,6 +520,11 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
   if (contact_samples > 0) {
     s["contact_pairs_mean"] = contact_pairs_sum / contact_samples;
     s["min_contact_distance"] = finite_or_null(min_d);
+    if (model.params.solver.contact_reuse > 0)
+      s["contact_linearised_fraction"] = static_cast<double>(contact_linearised) / contact_samples;
+  }
+  if (model.params.solver.contact_reuse > 0 && report.steps > 0) {
+    s["matrix_kept_fraction"] = static_cast<double>(matrix_kept) / report.steps;
   }
   s["constraint_forces"] = constraint_forces_json(data);
   if (friction.steps > 0) {

@@ -112,6 +112,7 @@ void Simulator::add_term(std::unique_ptr<Term> term) {
   enable_operator_stiffness(*term);
   m_terms.push_back(std::move(term));
   m_cached = false;
+  m_kept_valid = false;  // the kept matrix lacks the new term's stiffness
 }
 
 void Simulator::enable_operator_stiffness(Term& term) {
@@ -264,9 +265,23 @@ bool Simulator::imex_step(const State& s, double h, Eigen::VectorXd& q_out,
                           Eigen::VectorXd& v_out) {
   const Eigen::VectorXd& inv_m = m_model.inv_mass3;
   forward(s);  // every term's force at (q, v), recorded; the implicit terms' also on its own
+  // with contact reuse and no length rows, the matrix M + h² K (its stiffness blocks, its
+  // factor, the glues' W and S) is kept while every control point stays within the reuse
+  // distance of where it was formed: linearly implicit Euler with a lagged Jacobian, the
+  // contact linearisation's counterpart (docs/model.md §5.2)
+  const double reuse = m_model.params.solver.contact_reuse * m_model.params.material.radius;
+  bool keep = false;
+  if (reuse > 0 && !m_model.params.solver.length_constraints && m_kept_valid && h == m_kept_h &&
+      m_kept_q.size() == s.q.size()) {
+    double moved2 = 0;
+    for (Eigen::Index k = 0; k + 2 < s.q.size(); k += 3)
+      moved2 = std::max(moved2, (s.q.segment<3>(k) - m_kept_q.segment<3>(k)).squaredNorm());
+    keep = moved2 <= reuse * reuse;
+  }
+  m_data.matrix_kept = keep;
   // the implicit terms' stiffness at q, summed
-  bool any = false;
-  {
+  bool any = keep && m_kept_any;
+  if (!keep) {
     ScopedTimer timer(m_data.stage_seconds["stiffness"]);
     for (auto& term : m_terms) {
       if (!term->has_stiffness()) continue;
@@ -302,19 +317,28 @@ bool Simulator::imex_step(const State& s, double h, Eigen::VectorXd& q_out,
   }
   ScopedTimer timer(m_data.stage_seconds["implicit"]);
   build_solve_constraints();
-  // with operator terms the factor preconditions their solve: it gets their stiffness on
-  // each segment's own control points as its blocks are summed (a hanging 12×12 at
-  // h = 1.6e-3 s: 3.8 iterations per step at a tolerance of 1e-2 with them, 12.5 without)
-  StiffSolver::ExtraBlock operator_blocks;
-  if (m_has_operator_terms)
-    operator_blocks = [&](int i, Matrix12d& block) {
-      for (const auto& term : m_terms)
-        if (term->has_operator_stiffness() && implicit(*term))
-          term->add_operator_segment_block(m_model, i, block);
-    };
-  {
-    ScopedTimer factor_timer(m_data.stage_seconds["implicit_factor"]);
-    if (!m_stiff.factor(m_model, m_blocks, h * h, m_fixed_dofs, operator_blocks)) return false;
+  if (!keep) {
+    m_kept_valid = false;
+    // with operator terms the factor preconditions their solve: it gets their stiffness on
+    // each segment's own control points as its blocks are summed (a hanging 12×12 at
+    // h = 1.6e-3 s: 3.8 iterations per step at a tolerance of 1e-2 with them, 12.5 without)
+    StiffSolver::ExtraBlock operator_blocks;
+    if (m_has_operator_terms)
+      operator_blocks = [&](int i, Matrix12d& block) {
+        for (const auto& term : m_terms)
+          if (term->has_operator_stiffness() && implicit(*term))
+            term->add_operator_segment_block(m_model, i, block);
+      };
+    {
+      ScopedTimer factor_timer(m_data.stage_seconds["implicit_factor"]);
+      if (!m_stiff.factor(m_model, m_blocks, h * h, m_fixed_dofs, operator_blocks)) return false;
+    }
+    if (reuse > 0 && !m_model.params.solver.length_constraints) {
+      m_kept_valid = true;
+      m_kept_any = any;
+      m_kept_h = h;
+      m_kept_q = s.q;
+    }
   }
   ScopedTimer rhs_timer(m_data.stage_seconds["implicit_rhs"]);
   m_rhs = h * (m_force + m_force_implicit);
@@ -346,7 +370,7 @@ bool Simulator::imex_step(const State& s, double h, Eigen::VectorXd& q_out,
   m_glue_mu.resize(0);
   {
     ScopedTimer glue_timer(m_data.stage_seconds["implicit_glue"]);
-    hold_glues_in_solve(s, h, m_dv);
+    hold_glues_in_solve(s, h, m_dv, keep);
   }
   v_out = s.v + m_dv;
   q_out = s.q + h * v_out;
@@ -518,22 +542,25 @@ void Simulator::build_solve_constraints() {
   m_glue_c.resize(offset);
 }
 
-void Simulator::hold_glues_in_solve(const State& s, double h, Eigen::VectorXd& dv) {
+void Simulator::hold_glues_in_solve(const State& s, double h, Eigen::VectorXd& dv, bool kept) {
   const int m = static_cast<int>(m_glue_rows.size());
   if (m == 0) return;
   // with A = M + h² K = L Lᵀ: W = L⁻¹ Jᵀ (forward solves only, each from its column's
   // first entry), S = J A⁻¹ Jᵀ = Wᵀ W; J (v + Δv₀ − A⁻¹ Jᵀ μ) = −C(q, t + h) / h, and
-  // A⁻¹ Jᵀ μ = L⁻ᵀ (W μ): one backward solve
+  // A⁻¹ Jᵀ μ = L⁻ᵀ (W μ): one backward solve. With the matrix kept (and J constant: the
+  // glues' rows are built once), W and S are the last step's.
   const int n = static_cast<int>(dv.size());
-  m_glue_y.setZero(n, m);
-  int first = n;
-  for (int r = 0; r < m; ++r)
-    for (const auto& [dof, value] : m_glue_rows[r]) {
-      m_glue_y(dof, r) = value;
-      first = std::min(first, dof);
-    }
-  m_stiff.forward(m_glue_y, first);  // every column in one pass
-  const Eigen::MatrixXd S = m_glue_y.transpose() * m_glue_y;
+  if (!kept || m_glue_y.rows() != n || m_glue_y.cols() != m) {
+    m_glue_y.setZero(n, m);
+    int first = n;
+    for (int r = 0; r < m; ++r)
+      for (const auto& [dof, value] : m_glue_rows[r]) {
+        m_glue_y(dof, r) = value;
+        first = std::min(first, dof);
+      }
+    m_stiff.forward(m_glue_y, first);  // every column in one pass
+    m_glue_s.compute(m_glue_y.transpose() * m_glue_y);
+  }
   Eigen::VectorXd rhs(m);
   int offset = 0;
   for (const ConstraintGroup* group : m_solve_groups) {
@@ -547,7 +574,7 @@ void Simulator::hold_glues_in_solve(const State& s, double h, Eigen::VectorXd& d
     for (const auto& [dof, value] : m_glue_rows_all[r]) jv += value * (s.v[dof] + dv[dof]);
     rhs[r] = jv + m_glue_c[m_glue_row_of[r]] / h;
   }
-  m_glue_mu = S.ldlt().solve(rhs);
+  m_glue_mu = m_glue_s.solve(rhs);
   Eigen::VectorXd column = m_glue_y * m_glue_mu;
   m_stiff.backward(column);
   dv -= column;
@@ -730,6 +757,8 @@ double Simulator::force_residual(const State& state) {
   m_data.static_constraints.clear();
   const int n = m_model.num_cp();
   Eigen::VectorXd zero = Eigen::VectorXd::Zero(state.q.size()), force;
+  // exactly: no term reuses an earlier evaluation's model of its force here
+  for (auto& term : m_terms) term->refresh();
   compute_forces(state.q, zero, state.time, force);
   // the acceleration a = M⁻¹ f, and the largest of its control points'
   Eigen::VectorXd a(force.size());
@@ -772,7 +801,10 @@ double Simulator::kinetic_energy(const State& s) const {
 
 double Simulator::potential_energy(const State& s) {
   double e = 0;
-  for (auto& term : m_terms) e += term->energy(m_model, s.q, s.time);
+  for (auto& term : m_terms) {
+    term->refresh();
+    e += term->energy(m_model, s.q, s.time);
+  }
   return e;
 }
 

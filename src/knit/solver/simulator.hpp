@@ -17,6 +17,8 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Dense>
+
 #include "knit/constraints/projection.hpp"
 #include "knit/energy/term.hpp"
 #include "knit/filters/velocity_filter.hpp"
@@ -153,7 +155,8 @@ class Simulator {
   // given velocities (fixed coordinates of the band solve), the glues' and pins' rows as
   // constraints with multipliers.
   void build_solve_constraints();
-  void hold_glues_in_solve(const State& state, double h, Eigen::VectorXd& dv);
+  // kept: the matrix is the last step's (W and S are kept with it)
+  void hold_glues_in_solve(const State& state, double h, Eigen::VectorXd& dv, bool kept);
   bool m_solve_constraints_built = false;
   struct ClampedPoint {
     const ClampGroup* group;
@@ -175,7 +178,13 @@ class Simulator {
   std::vector<Eigen::Vector3d> m_solve_force, m_solve_torque, m_solve_about;
   void record_solve_forces(const Eigen::VectorXd& q, double time, double h);
   Eigen::VectorXd m_glue_c;
-  StiffSolver::RowMajorMatrix m_glue_y;  // L⁻¹ ∇Cᵀ, with M + h² K = L Lᵀ
+  StiffSolver::RowMajorMatrix m_glue_y;   // L⁻¹ ∇Cᵀ, with M + h² K = L Lᵀ
+  Eigen::LDLT<Eigen::MatrixXd> m_glue_s;  // S = J A⁻¹ Jᵀ
+  // the kept matrix (contact reuse, imex_step): whether the factor, m_blocks and the glues'
+  // W and S may be reused, whether it has stiffness blocks, its h and where it was formed
+  bool m_kept_valid = false, m_kept_any = false;
+  double m_kept_h = 0;
+  Eigen::VectorXd m_kept_q;
   // IMEX_CONTACT: whether a term is taken implicitly; the operator terms' part of the
   // solve by preconditioned conjugate gradients
   bool implicit(const Term& term) const;
