@@ -4,7 +4,8 @@
 // shape (lengths along the fabric, extents, edge curl), with each shape measure's
 // relative difference from the first method's run of the same pattern.
 //   bench_relax_to_rest [--patterns stockinette,garter,rib2x2] [--rows R] [--cols C]
-//                       [--methods dynamic:explicit:8.474576271186441e-05,fire:imex:3e-4]
+//                       [--methods dynamic:explicit:8.474576271186441e-05,fire:imex:3e-4,
+//                                  fire:imex-contact:6e-4,fire:imex-contact:6e-4:0.05]
 //                       [--max-time S] [--threads N]
 // A method is KIND:INTEGRATOR:H[:REUSE] — KIND dynamic (damped dynamics, the kinetic-energy
 // rest test unless --residual is given) or fire (FIRE minimisation, the force-residual
@@ -44,14 +45,15 @@ constexpr const char* SHAPE_KEYS[] = {"course_length_cm", "wale_length_cm", "cou
 int main(int argc, char** argv) {
   std::string patterns_text = "stockinette,garter,rib2x2";
   std::string methods_text =
-      "dynamic:explicit:8.474576271186441e-05,dynamic:imex:3e-4,fire:imex:3e-4";
+      "dynamic:explicit:8.474576271186441e-05,dynamic:imex:3e-4,fire:imex:3e-4,"
+      "fire:imex-contact:6e-4,fire:imex-contact:6e-4:0.05";
   int rows = 12, cols = 12, threads = 0;
   double max_time = 30, residual = 0;
   CLI::App app{"bench_relax_to_rest: wall time to relax knitted samples to rest, by method"};
   app.add_option("--patterns", patterns_text, "comma-separated patterns");
   app.add_option("--rows", rows);
   app.add_option("--cols", cols);
-  app.add_option("--methods", methods_text, "comma-separated KIND:INTEGRATOR:H");
+  app.add_option("--methods", methods_text, "comma-separated KIND:INTEGRATOR:H[:REUSE]");
   app.add_option("--max-time", max_time, "simulated seconds at most per run");
   app.add_option("--residual", residual,
                  "force-residual rest threshold for every method (cm/s²; 0: the kinetic-energy "

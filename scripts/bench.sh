@@ -3,8 +3,9 @@
 #   [step|relax|scaling|threads|contact|step_limit|time_to_solution|relax_to_rest|scarf]...
 # (none: the first five). Each prints one JSON document; they are also saved under out/bench/.
 #   relax_to_rest: 12×12 stockinette, garter and 2×2 rib relaxed from their generated
-#   yarn by damped dynamics (explicit and IMEX) and by FIRE, to rest or 30 s simulated
-#   (about 15 minutes on 2 cores, 6 of them the explicit stockinette; RELAX_ARGS
+#   yarn by damped dynamics (explicit and IMEX) and by FIRE (IMEX; imex-contact without
+#   and with contact reuse), to rest or 30 s simulated (about 17 minutes on 2 cores, 6 of
+#   them the explicit stockinette; RELAX_ARGS
 #   replaces the options, e.g. RELAX_ARGS="--patterns stockinette --methods fire:imex:3e-4").
 #   scarf: the 20×160 scarf of examples/scarf_on_plane.json falling onto the floor for
 #   SCARF_TIME s (default 0.2: the impact and the first folds) with the explicit step at
