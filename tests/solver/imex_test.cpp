@@ -44,6 +44,13 @@ TEST(Imex, BandSolverMatchesDenseCholesky) {
   solver.solve(rhs, x);
   EXPECT_LT((x - expected).norm(), 1e-10 * expected.norm());
   EXPECT_LT((dense * x - rhs).norm(), 1e-10 * rhs.norm());
+  // the halves (the glues' correction goes between them): y = L⁻¹ b has yᵀy = bᵀ A⁻¹ b, and
+  // the backward half of y is the solution
+  Eigen::VectorXd y;
+  solver.solve_forward(rhs, y);
+  EXPECT_NEAR(y.squaredNorm(), rhs.dot(expected), 1e-10 * std::abs(rhs.dot(expected)));
+  solver.backward(y);
+  EXPECT_LT((y - expected).norm(), 1e-10 * expected.norm());
 
   // with given values at some coordinates (a clamp's): the free ones solve the rows of
   // the free ones, and the fixed ones' rows leave over what held them

@@ -141,23 +141,57 @@ void Simulator::band_product(const Eigen::VectorXd& x, double h2, Eigen::VectorX
   add_blocks_product(x, h2, y);
 }
 
+void Simulator::pack_blocks() {
+  // each block's upper triangle row by row (78 numbers): the product below reads half of
+  // what the full blocks hold, and it is bound by that reading
+  const int n_seg = m_model.num_seg();
+  m_packed.resize(static_cast<size_t>(n_seg) * PACKED);
+  tbb::parallel_for(tbb::blocked_range<int>(0, n_seg, 256), [&](const tbb::blocked_range<int>& r) {
+    for (int i = r.begin(); i < r.end(); ++i) {
+      double* p = m_packed.data() + static_cast<size_t>(i) * PACKED;
+      for (int a = 0; a < 12; ++a)
+        for (int b = a; b < 12; ++b) *p++ = m_blocks[i](a, b);
+    }
+  });
+}
+
 void Simulator::add_blocks_product(const Eigen::VectorXd& x, double h2, Eigen::VectorXd& y) const {
   const int n_seg = m_model.num_seg();
   auto add = [&](int i) {
+    const double* p = m_packed.data() + static_cast<size_t>(i) * PACKED;
     const int base = 3 * m_model.seg_cp[i];
-    y.segment<12>(base) += h2 * (m_blocks[i] * x.segment<12>(base));
+    const double* xs = x.data() + base;
+    double acc[12] = {};
+    for (int a = 0; a < 12; ++a) {
+      const double xa = xs[a];
+      double sum = *p++ * xa;
+      for (int b = a + 1; b < 12; ++b, ++p) {
+        sum += *p * xs[b];
+        acc[b] += *p * xa;
+      }
+      acc[a] += sum;
+    }
+    double* ys = y.data() + base;
+    for (int a = 0; a < 12; ++a) ys[a] += h2 * acc[a];
   };
   if (!m_seg_ascending) {
     for (int i = 0; i < n_seg; ++i) add(i);
     return;
   }
-  // segments i and i + 4 share no coordinate: each set of segments four apart writes
-  // disjoint rows
-  for (int set = 0; set < 4; ++set)
-    tbb::parallel_for(tbb::blocked_range<int>(0, (n_seg - set + 3) / 4, 256),
-                      [&](const tbb::blocked_range<int>& r) {
-                        for (int k = r.begin(); k < r.end(); ++k) add(set + 4 * k);
-                      });
+  // chunks of consecutive segments in parallel, each but its first three segments (which
+  // may share control points with the chunk before); those three per chunk after, in turn
+  constexpr int CHUNK = 512;
+  const int chunks = (n_seg + CHUNK - 1) / CHUNK;
+  tbb::parallel_for(
+      tbb::blocked_range<int>(0, chunks, 1),
+      [&](const tbb::blocked_range<int>& r) {
+        for (int c = r.begin(); c < r.end(); ++c)
+          for (int i = c * CHUNK + (c > 0 ? 3 : 0); i < std::min(n_seg, (c + 1) * CHUNK); ++i)
+            add(i);
+      },
+      tbb::simple_partitioner());
+  for (int c = 1; c < chunks; ++c)
+    for (int i = c * CHUNK; i < std::min(n_seg, c * CHUNK + 3); ++i) add(i);
 }
 
 void Simulator::add_filter(std::unique_ptr<VelocityFilter> filter) {
@@ -332,6 +366,7 @@ bool Simulator::imex_step(const State& s, double h, Eigen::VectorXd& q_out,
     {
       ScopedTimer factor_timer(m_data.stage_seconds["implicit_factor"]);
       if (!m_stiff.factor(m_model, m_blocks, h * h, m_fixed_dofs, operator_blocks)) return false;
+      pack_blocks();
     }
     if (reuse > 0 && !m_model.params.solver.length_constraints) {
       m_kept_valid = true;
@@ -360,17 +395,26 @@ bool Simulator::imex_step(const State& s, double h, Eigen::VectorXd& q_out,
     m_rhs.segment<3>(3 * c.cp) = (target - s.q.segment<3>(3 * c.cp)) / h - s.v.segment<3>(3 * c.cp);
   }
   rhs_timer.stop();
-  m_stiff.solve(m_rhs, m_dv);
   m_data.solve_iterations = 0;
   m_data.solve_residual = 0;
-  if (m_has_operator_terms && m_model.params.solver.contact_solve_tolerance > 0) {
-    ScopedTimer cg(m_data.stage_seconds["implicit_cg"]);
-    solve_with_operator(s, h);
-  }
   m_glue_mu.resize(0);
-  {
+  const bool cg = m_has_operator_terms && m_model.params.solver.contact_solve_tolerance > 0;
+  if (cg || m_glue_rows.empty()) {
+    m_stiff.solve(m_rhs, m_dv);
+    if (cg) {
+      ScopedTimer cg_timer(m_data.stage_seconds["implicit_cg"]);
+      solve_with_operator(s, h);
+    }
     ScopedTimer glue_timer(m_data.stage_seconds["implicit_glue"]);
-    hold_glues_in_solve(s, h, m_dv, keep);
+    hold_glues_in_solve(s, h, m_dv, keep, false);
+  } else {
+    // the glues between the factor's two halves: one backward solve, not two
+    m_stiff.solve_forward(m_rhs, m_dv);
+    {
+      ScopedTimer glue_timer(m_data.stage_seconds["implicit_glue"]);
+      hold_glues_in_solve(s, h, m_dv, keep, true);
+    }
+    m_stiff.backward(m_dv);
   }
   v_out = s.v + m_dv;
   q_out = s.q + h * v_out;
@@ -542,13 +586,16 @@ void Simulator::build_solve_constraints() {
   m_glue_c.resize(offset);
 }
 
-void Simulator::hold_glues_in_solve(const State& s, double h, Eigen::VectorXd& dv, bool kept) {
+void Simulator::hold_glues_in_solve(const State& s, double h, Eigen::VectorXd& dv, bool kept,
+                                    bool halfway) {
   const int m = static_cast<int>(m_glue_rows.size());
   if (m == 0) return;
   // with A = M + h² K = L Lᵀ: W = L⁻¹ Jᵀ (forward solves only, each from its column's
   // first entry), S = J A⁻¹ Jᵀ = Wᵀ W; J (v + Δv₀ − A⁻¹ Jᵀ μ) = −C(q, t + h) / h, and
-  // A⁻¹ Jᵀ μ = L⁻ᵀ (W μ): one backward solve. With the matrix kept (and J constant: the
-  // glues' rows are built once), W and S are the last step's.
+  // A⁻¹ Jᵀ μ = L⁻ᵀ (W μ): one backward solve. Halfway (dv = y = L⁻¹ b, the solve's
+  // forward half): J Δv₀ = J L⁻ᵀ y = Wᵀ y on the free coordinates, and the correction
+  // y − W μ goes into the solve's own backward half. With the matrix kept (and J
+  // constant: the glues' rows are built once), W and S are the last step's.
   const int n = static_cast<int>(dv.size());
   if (!kept || m_glue_y.rows() != n || m_glue_y.cols() != m) {
     m_glue_y.setZero(n, m);
@@ -567,14 +614,23 @@ void Simulator::hold_glues_in_solve(const State& s, double h, Eigen::VectorXd& d
     group->evaluate(m_model, s.q, s.time + h, m_glue_c.data() + offset, nullptr);
     offset += group->rows();
   }
+  if (halfway) rhs.noalias() = m_glue_y.transpose() * dv;  // J Δv₀ on the free coordinates
   for (int r = 0; r < m; ++r) {
     // J v⁺ over every coordinate of the row: a fixed one's v⁺ is known (the solve gave
-    // it its value), only the free ones' are corrected by A⁻¹ Jᵀ μ
+    // it its value, which y holds too), only the free ones' are corrected by A⁻¹ Jᵀ μ
     double jv = 0;
     for (const auto& [dof, value] : m_glue_rows_all[r]) jv += value * (s.v[dof] + dv[dof]);
+    if (halfway) {
+      for (const auto& [dof, value] : m_glue_rows[r]) jv -= value * dv[dof];
+      jv += rhs[r];
+    }
     rhs[r] = jv + m_glue_c[m_glue_row_of[r]] / h;
   }
   m_glue_mu = m_glue_s.solve(rhs);
+  if (halfway) {
+    dv.noalias() -= m_glue_y * m_glue_mu;
+    return;
+  }
   Eigen::VectorXd column = m_glue_y * m_glue_mu;
   m_stiff.backward(column);
   dv -= column;

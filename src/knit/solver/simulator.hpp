@@ -155,8 +155,10 @@ class Simulator {
   // given velocities (fixed coordinates of the band solve), the glues' and pins' rows as
   // constraints with multipliers.
   void build_solve_constraints();
-  // kept: the matrix is the last step's (W and S are kept with it)
-  void hold_glues_in_solve(const State& state, double h, Eigen::VectorXd& dv, bool kept);
+  // kept: the matrix is the last step's (W and S are kept with it); halfway: dv is the
+  // solve's forward half L⁻¹ b, corrected in place before its backward half
+  void hold_glues_in_solve(const State& state, double h, Eigen::VectorXd& dv, bool kept,
+                           bool halfway);
   bool m_solve_constraints_built = false;
   struct ClampedPoint {
     const ClampGroup* group;
@@ -191,8 +193,12 @@ class Simulator {
   void enable_operator_stiffness(Term& term);
   void add_operator_product(const Eigen::VectorXd& x, Eigen::VectorXd& y) const;
   void band_product(const Eigen::VectorXd& x, double h2, Eigen::VectorXd& y) const;
-  // y += h2 Σ blocks x
+  // y += h2 Σ blocks x, from m_packed: each block's upper triangle (pack_blocks, after
+  // every change of m_blocks)
   void add_blocks_product(const Eigen::VectorXd& x, double h2, Eigen::VectorXd& y) const;
+  void pack_blocks();
+  static constexpr int PACKED = 78;
+  std::vector<double> m_packed;
   void solve_with_operator(const State& state, double h);
   // the length constraints as rows of the IMEX solve: their gradients ∇C_i, values C_i and
   // penalty stiffness ρ_i at the step's start

@@ -78,6 +78,7 @@ bool StiffSolver::factor(const Model& model, const std::vector<Matrix12d>& block
   }
   // band Cholesky, right looking: column j scaled by its pivot, then the trailing
   // triangle within the band updated by its outer product
+  m_inv_pivot.resize(m_n);
   for (int j = 0; j < m_n; ++j) {
     double* col = a + static_cast<size_t>(j) * W;
     if (!(col[0] > 0)) return false;
@@ -85,6 +86,7 @@ bool StiffSolver::factor(const Model& model, const std::vector<Matrix12d>& block
     col[0] = pivot;
     const int m = std::min(BAND, m_n - 1 - j);
     const double inv = 1.0 / pivot;
+    m_inv_pivot[j] = inv;  // the solves multiply (a division would lengthen their chain)
     for (int r = 1; r <= m; ++r) col[r] *= inv;
     for (int c = 1; c <= m; ++c) {
       double* next = a + static_cast<size_t>(j + c) * W;
@@ -96,21 +98,26 @@ bool StiffSolver::factor(const Model& model, const std::vector<Matrix12d>& block
 }
 
 void StiffSolver::solve(const Eigen::VectorXd& rhs, Eigen::VectorXd& x) const {
-  x = rhs;
+  solve_forward(rhs, x);
+  backward(x);
+}
+
+void StiffSolver::solve_forward(const Eigen::VectorXd& rhs, Eigen::VectorXd& y) const {
+  y = rhs;
   // the fixed coordinates' values: what they contribute to the free rows moves to the
   // right-hand side (their own rows are the identity)
   for (const Coupling& c : m_fixed)
-    for (const auto& [j, value] : c.entries) x[j] -= value * rhs[c.dof];
-  forward(x);
-  backward(x);
+    for (const auto& [j, value] : c.entries) y[j] -= value * rhs[c.dof];
+  forward(y);
 }
 
 void StiffSolver::forward(Eigen::VectorXd& x, int first) const {
   const double* a = m_band.data();
+  const double* inv = m_inv_pivot.data();
   // L y = b
   for (int j = std::max(0, first); j < m_n; ++j) {
     const double* col = a + static_cast<size_t>(j) * W;
-    x[j] /= col[0];
+    x[j] *= inv[j];
     const int m = std::min(BAND, m_n - 1 - j);
     for (int r = 1; r <= m; ++r) x[j + r] -= col[r] * x[j];
   }
@@ -123,7 +130,8 @@ void StiffSolver::forward(RowMajorMatrix& X, int first) const {
   for (int j = std::max(0, first); j < m_n; ++j) {
     const double* col = a + static_cast<size_t>(j) * W;
     double* xj = x + static_cast<size_t>(j) * m_cols;
-    for (int k = 0; k < m_cols; ++k) xj[k] /= col[0];
+    const double inv = m_inv_pivot[j];
+    for (int k = 0; k < m_cols; ++k) xj[k] *= inv;
     const int m = std::min(BAND, m_n - 1 - j);
     for (int r = 1; r <= m; ++r) {
       double* xr = xj + static_cast<size_t>(r) * m_cols;
@@ -135,13 +143,14 @@ void StiffSolver::forward(RowMajorMatrix& X, int first) const {
 
 void StiffSolver::backward(Eigen::VectorXd& x) const {
   const double* a = m_band.data();
+  const double* inv = m_inv_pivot.data();
   // Lᵀ x = y
   for (int j = m_n - 1; j >= 0; --j) {
     const double* col = a + static_cast<size_t>(j) * W;
     const int m = std::min(BAND, m_n - 1 - j);
     double s = x[j];
     for (int r = 1; r <= m; ++r) s -= col[r] * x[j + r];
-    x[j] = s / col[0];
+    x[j] = s * inv[j];
   }
 }
 

@@ -39,6 +39,10 @@ class StiffSolver {
   /// Solves the factored system for `rhs` (size 3 × control points) into x. At a fixed
   /// coordinate rhs holds its given value, which x then has.
   void solve(const Eigen::VectorXd& rhs, Eigen::VectorXd& x) const;
+  /// solve's first half: y = L⁻¹ rhs (with the fixed coordinates' couplings moved to the
+  /// right-hand side); backward(y) then gives solve's x. Between the two a caller may
+  /// correct y (the glues' W μ: Simulator::imex_step).
+  void solve_forward(const Eigen::VectorXd& rhs, Eigen::VectorXd& y) const;
   /// The two halves of solve for a right-hand side that is zero at every fixed coordinate
   /// (a constraint's column Jᵀ): forward solves L y = x in place, x zero before `first`
   /// (the solve starts there, which a column near a yarn's end makes short); backward
@@ -69,6 +73,7 @@ class StiffSolver {
   std::vector<int> m_fixed_dofs;
   // lower band, column major: entry (i, j), j ≤ i ≤ j + BAND, at m_band[j * (BAND + 1) + i − j]
   std::vector<double> m_band;
+  std::vector<double> m_inv_pivot;  // 1 / L(j, j)
 };
 
 }  // namespace knit
