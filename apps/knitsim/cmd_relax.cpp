@@ -24,7 +24,8 @@ void register_relax(CLI::App& app) {
     knit::Material material = knit::relax_knit_params().material;
     int contact_points = knit::relax_knit_params().discretisation.contact_points;
     double time_step = knit::relax_knit_params().solver.time_step;
-    double contact_reuse = 0;
+    double contact_reuse = 0, contact_solve_tolerance = 0, end_mass_floor = 0;
+    bool implicit_bending = false;
     double shrink = knit::RELAX_SHRINK;
     int threads = 0;
     bool quiet = false, no_frames = false, overwrite = false, fire = false;
@@ -91,6 +92,9 @@ void register_relax(CLI::App& app) {
          "s (default 1/11800; 1/25000 with --from: imported swatches start tightly packed)")
       ->check(finite_range(knit::param_range("time_step").min, knit::param_range("time_step").max));
   add_integrator_option(cmd, o->integrator);
+  add_implicit_bending_option(cmd, o->implicit_bending);
+  add_end_mass_floor_option(cmd, o->end_mass_floor);
+  add_contact_solve_tolerance_option(cmd, o->contact_solve_tolerance);
   add_contact_reuse_option(cmd, o->contact_reuse);
   cmd->add_option("--max-time", o->run.max_time,
                   "simulated seconds at most (with --resume: seconds more)")
@@ -171,7 +175,10 @@ void register_relax(CLI::App& app) {
       if (given("--time-step")) p.solver.time_step = o->time_step;
       p.solver.integrator = knit::parse_integrator(o->integrator);
       p.solver.contact_reuse = o->contact_reuse;
+      p.solver.contact_solve_tolerance = o->contact_solve_tolerance;
+      p.solver.implicit_bending = o->implicit_bending;
       p.discretisation.contact_points = o->contact_points;
+      p.discretisation.end_mass_floor = o->end_mass_floor;
       o->yarns.shrink = o->shrink;
       o->yarns.run = o->run;
       add_provenance(o->yarns.extra);
@@ -180,9 +187,12 @@ void register_relax(CLI::App& app) {
       knit::Params& p = o->knit.params;
       p.material = o->material;
       p.discretisation.contact_points = o->contact_points;
+      p.discretisation.end_mass_floor = o->end_mass_floor;
       p.solver.time_step = o->time_step;
       p.solver.integrator = knit::parse_integrator(o->integrator);
       p.solver.contact_reuse = o->contact_reuse;
+      p.solver.contact_solve_tolerance = o->contact_solve_tolerance;
+      p.solver.implicit_bending = o->implicit_bending;
       o->knit.shrink = o->shrink;
       o->knit.fire = o->fire;
       o->knit.run = o->run;

@@ -42,14 +42,7 @@ void register_simulate(CLI::App& app) {
       ->check(finite_range(knit::param_range("time_step").min, knit::param_range("time_step").max));
   add_integrator_option(cmd, opts->integrator);
   add_implicit_bending_option(cmd, opts->implicit_bending);
-  cmd->add_option("--contact-solve-tolerance", opts->contact_solve_tolerance,
-                  "with --integrator imex-contact: 0 (the default) solves each step once, "
-                  "contact's coupling between segments taken at the step's start velocity; "
-                  "> 0 solves the whole linear system by conjugate gradients until the "
-                  "residual is this fraction of its right-hand side (about twice the wall "
-                  "time; docs/model.md §5.2); overrides the scene's contact_solve_tolerance")
-      ->check(finite_range(knit::param_range("contact_solve_tolerance").min,
-                           knit::param_range("contact_solve_tolerance").max));
+  add_contact_solve_tolerance_option(cmd, opts->contact_solve_tolerance);
   add_contact_reuse_option(cmd, opts->contact_reuse);
   cmd->add_option("--output-every", opts->output_every,
                   "override the scene's steps between written states and log rows")

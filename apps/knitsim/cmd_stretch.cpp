@@ -102,12 +102,7 @@ void register_stretch(CLI::App& app) {
                   "viscous contact damping only)")
       ->check(finite_range(knit::param_range("yarn_friction").min,
                            knit::param_range("yarn_friction").max));
-  cmd->add_option("--end-mass-floor", o->stretch.params.discretisation.end_mass_floor,
-                  "each yarn end's two control points get at least this fraction of an interior "
-                  "one's mass (default 0: the row sums, 1/24 at the last point; 0.5 stops a free "
-                  "end jittering when nothing damps it, as with --yarn-friction)")
-      ->check(finite_range(knit::param_range("end_mass_floor").min,
-                           knit::param_range("end_mass_floor").max));
+  add_end_mass_floor_option(cmd, o->stretch.params.discretisation.end_mass_floor);
   cmd->add_option("--rows", o->relax.knit.rows, "rows of the PATTERN's sample")
       ->check(CLI::Range(2, 1'000'000));
   cmd->add_option("--cols", o->relax.knit.cols, "stitches per row of the PATTERN's sample")

@@ -111,6 +111,25 @@ void add_implicit_bending_option(CLI::App* cmd, bool& implicit_bending) {
                 "(docs/model.md §5.2)");
 }
 
+void add_end_mass_floor_option(CLI::App* cmd, double& floor) {
+  cmd->add_option("--end-mass-floor", floor,
+                  "each yarn end's two control points get at least this fraction of an interior "
+                  "one's mass (default 0: the row sums, 1/24 at the last point; 0.5 stops a free "
+                  "end jittering when nothing damps it, as with --yarn-friction)")
+      ->check(finite_range(knit::param_range("end_mass_floor").min,
+                           knit::param_range("end_mass_floor").max));
+}
+
+void add_contact_solve_tolerance_option(CLI::App* cmd, double& tolerance) {
+  cmd->add_option("--contact-solve-tolerance", tolerance,
+                  "with --integrator imex-contact: 0 (the default) solves each step once, "
+                  "contact's coupling between segments taken at the step's start velocity; "
+                  "> 0 solves the whole linear system by conjugate gradients until the "
+                  "residual is this fraction of its right-hand side (docs/model.md §5.2)")
+      ->check(finite_range(knit::param_range("contact_solve_tolerance").min,
+                           knit::param_range("contact_solve_tolerance").max));
+}
+
 void add_contact_reuse_option(CLI::App* cmd, double& reuse) {
   cmd->add_option("--contact-reuse", reuse,
                   "with --integrator imex-contact: reuse an exact contact evaluation's "

@@ -247,6 +247,35 @@ TEST(Cli, RelaxTakesTheContactReuse) {
   EXPECT_FALSE(fs::exists(out + "_range"));
 }
 
+// `relax` takes the solver options `simulate` and `stretch` take (implicit bending, the
+// contact solve's tolerance, the end mass floor): they reach the run's parameters; a FIRE
+// run counts its restarts; out of range they are refused by name, nothing written.
+TEST(Cli, RelaxTakesTheSolverOptions) {
+  const std::string out = temp_dir("cli_relax_solver");
+  const Result r =
+      run("relax garter --rows 3 --cols 3 --fire --integrator imex-contact --time-step 6e-4 "
+          "--implicit-bending --contact-solve-tolerance 0.01 --end-mass-floor 0.5 --max-time 0.03 "
+          "--check-every 25 --quiet --no-frames --out " +
+          out);
+  ASSERT_EQ(r.code, 0) << r.output;
+  std::ifstream in(out + "/summary.json");
+  const auto s = nlohmann::json::parse(in);
+  EXPECT_TRUE(s["params"]["solver"]["implicit_bending"].get<bool>());
+  EXPECT_EQ(s["params"]["solver"]["contact_solve_tolerance"].get<double>(), 0.01);
+  EXPECT_EQ(s["params"]["discretisation"]["end_mass_floor"].get<double>(), 0.5);
+  EXPECT_GT(s["implicit_solve"]["steps"].get<long long>(), 0);  // the solve iterated
+  EXPECT_GE(s["fire_restarts"].get<long long>(), 0);
+  for (const char* bad : {"--end-mass-floor 2", "--contact-solve-tolerance 5"}) {
+    const Result refused = run(std::string("relax garter --integrator imex-contact ") + bad +
+                               " --out " + out + "_bad");
+    EXPECT_NE(refused.code, 0);
+    EXPECT_NE(refused.output.find(std::string(bad).substr(0, std::string(bad).find(' '))),
+              std::string::npos)
+        << refused.output;
+    EXPECT_FALSE(fs::exists(out + "_bad"));
+  }
+}
+
 // A relaxation stopped and resumed (--resume) follows the same path as one that ran on:
 // the state file holds positions, velocities and time, and the glues go on closing.
 TEST(Cli, ResumedRelaxationContinuesTheSamePath) {

@@ -203,9 +203,11 @@ KnitRelaxation setup_knit_relaxation(const std::string& pattern_name, const Rela
   if (r.state.q.size() != model.num_dof() || r.state.v.size() != model.num_dof())
     throw std::invalid_argument("the state to resume from does not match the knit's size");
   r.sim = std::make_unique<Simulator>(std::move(model));
-  if (o.fire)
-    r.sim->add_filter(std::make_unique<FireFilter>());
-  else
+  if (o.fire) {
+    auto fire = std::make_unique<FireFilter>();
+    r.fire = fire.get();
+    r.sim->add_filter(std::move(fire));
+  } else
     r.sim->add_filter(std::make_unique<NonRigidDampingFilter>(
         r.sim->model(), o.params.material.alpha_small, o.params.material.alpha_large,
         o.knit.in_the_round));
@@ -256,6 +258,7 @@ RelaxResult relax_knit(const std::string& pattern_name, const RelaxKnitOptions& 
                         [&](Simulator&, const State& st, nlohmann::json& summary) {
                           const nlohmann::json shape = to_json(measure_fabric(model, st.q));
                           for (const auto& [k, v] : shape.items()) summary[k] = v;
+                          if (setup.fire) summary["fire_restarts"] = setup.fire->restarts();
                         });
   copy_relaxed(out, result.report);
   return result;

@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "knit/filters/fire.hpp"
 #include "knit/io/import.hpp"
 #include "knit/model/model.hpp"
 #include "knit/model/state.hpp"
@@ -104,6 +105,7 @@ struct KnitRelaxation {
   GeneratedKnit knit;
   std::unique_ptr<Simulator> sim;
   State state;
+  const FireFilter* fire = nullptr;  ///< the sim's FIRE filter (with RelaxKnitOptions::fire)
 };
 KnitRelaxation setup_knit_relaxation(const std::string& pattern, const RelaxKnitOptions& options);
 
