@@ -265,6 +265,14 @@ TEST(Cli, RelaxTakesTheSolverOptions) {
   EXPECT_EQ(s["params"]["discretisation"]["end_mass_floor"].get<double>(), 0.5);
   EXPECT_GT(s["implicit_solve"]["steps"].get<long long>(), 0);  // the solve iterated
   EXPECT_GE(s["fire_restarts"].get<long long>(), 0);
+  // where the residual sits: its largest point's acceleration is at least the RMS, and the
+  // top 1 % of points hold at least 1 % of its square
+  const auto& peak = s["force_residual_peak"];
+  EXPECT_GE(peak["acceleration"].get<double>(), s["force_residual"].get<double>());
+  EXPECT_GE(peak["top_percent_share"].get<double>(), 0.01);
+  EXPECT_LE(peak["top_percent_share"].get<double>(), 1.0);
+  EXPECT_EQ(peak["yarn"].get<int>(), 0);
+  EXPECT_EQ(peak["position_cm"].size(), 3u);
   for (const char* bad : {"--end-mass-floor 2", "--contact-solve-tolerance 5"}) {
     const Result refused = run(std::string("relax garter --integrator imex-contact ") + bad +
                                " --out " + out + "_bad");

@@ -959,8 +959,15 @@ void ContactTerm::record(StepData& data) const {
   c.min_distance_ratio = m_stats.min_distance_ratio;
   c.candidates_rebuilt = m_stats.candidates_rebuilt;
   c.linearised = m_stats.linearised;
+  if (m_culling != ContactCulling::BVH) {
+    c.pairs.clear();
+    c.pairs_of = -1;
+    return;
+  }
+  // a linearised state's pairs are those of the evaluation it reuses: the list stands
+  if (c.pairs_of == m_evaluations) return;
+  c.pairs_of = m_evaluations;
   c.pairs.clear();
-  if (m_culling != ContactCulling::BVH) return;
   // row i's pairs go to [offset[i], offset[i + 1]): filled in parallel, in (i, j) order
   const int n = std::min<int>(m_num_seg, static_cast<int>(m_pairs.size()));
   m_record_offset.resize(n + 1);

@@ -166,6 +166,12 @@ class Model {
   }
   /// Total yarn rest length (cm).
   double total_length() const;
+  /// The yarn that holds global control point `cp` (its index in `yarns`).
+  int yarn_of_cp(int cp) const {
+    const auto it = std::upper_bound(yarns.begin(), yarns.end(), cp,
+                                     [](int c, const YarnInfo& y) { return c < y.cp_end; });
+    return static_cast<int>(it - yarns.begin());
+  }
 };
 
 /// Segments on each side of a glued point that are kept out of contact with the other

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <limits>
 #include <sstream>
 
@@ -238,10 +239,12 @@ void Simulator::forward(const State& state, double known_violation) {
   m_force0.setZero(state.q.size());
   m_data.terms.resize(m_terms.size());
   // reset the contact record but keep its pair list's storage (no allocation per step)
+  // (the contact term rebuilds the list only when it describes another evaluation)
   std::vector<ContactPairRecord> pairs = std::move(m_data.contact.pairs);
-  pairs.clear();
+  const long long pairs_of = m_data.contact.pairs_of;
   m_data.contact = ContactRecord{};
   m_data.contact.pairs = std::move(pairs);
+  m_data.contact.pairs_of = pairs_of;
   m_data.objects.resize(m_model.objects.size());
   for (size_t k = 0; k < m_model.objects.size(); ++k)
     m_data.objects[k] = ObjectRecord{m_model.objects[k]->name};
@@ -753,8 +756,7 @@ StepResult Simulator::step(State& state, double h) {
   const Travel travel = step_travel(m_model, state.q, m_qnew);
   if (travel.relative > limit) {
     const int cp = travel.relative_cp;
-    int yarn = 0;
-    while (cp >= m_model.yarns[yarn].cp_end) ++yarn;
+    const int yarn = m_model.yarn_of_cp(cp);
     std::ostringstream msg;
     msg << "control point " << cp - m_model.yarns[yarn].cp_begin << " of yarn " << yarn << " moved "
         << travel.relative << " cm relative to its neighbour in one step at t = " << t_new
@@ -811,6 +813,9 @@ StepResult Simulator::step(State& state, double h) {
 double Simulator::force_residual(const State& state) {
   forward(state);
   m_data.static_constraints.clear();
+  m_data.force_residual_peak_cp = -1;
+  m_data.force_residual_peak = 0;
+  m_data.force_residual_top_share = 0;
   const int n = m_model.num_cp();
   Eigen::VectorXd zero = Eigen::VectorXd::Zero(state.q.size()), force;
   // exactly: no term reuses an earlier evaluation's model of its force here
@@ -838,9 +843,23 @@ double Simulator::force_residual(const State& state) {
     // h = √ε from rest, whose constraint force −∇Cᵀ Λ / h² is then −(f along the normals)
     m_projection.record_groups(m_model, q1, state.time, std::sqrt(eps), m_data.static_constraints);
     double mass = 0;
+    std::vector<double> share(n);  // m |a|² ε² per control point
     for (int k = 0; k < n; ++k) {
-      residual += m_model.mass[k] * (q1.segment<3>(3 * k) - q0.segment<3>(3 * k)).squaredNorm();
+      share[k] = m_model.mass[k] * (q1.segment<3>(3 * k) - q0.segment<3>(3 * k)).squaredNorm();
+      residual += share[k];
       mass += m_model.mass[k];
+      const double peak = std::sqrt(share[k] / m_model.mass[k]) / eps;
+      if (peak > m_data.force_residual_peak) {
+        m_data.force_residual_peak = peak;
+        m_data.force_residual_peak_cp = k;
+      }
+    }
+    if (residual > 0) {
+      const int top = std::max(1, n / 100);
+      std::nth_element(share.begin(), share.begin() + (top - 1), share.end(), std::greater<>());
+      double sum = 0;
+      for (int k = 0; k < top; ++k) sum += share[k];
+      m_data.force_residual_top_share = sum / residual;
     }
     residual = mass > 0 ? std::sqrt(residual / mass) / eps : 0;
   }
