@@ -175,7 +175,13 @@ py::dict step_data_dict(const StepData& s) {
       "friction"_a = py::dict("present"_a = s.friction.present, "pairs"_a = s.friction.pairs,
                               "stuck"_a = s.friction.stuck, "work"_a = s.friction.work,
                               "force"_a = s.friction.force, "passes"_a = s.friction.passes),
-      "stage_seconds"_a = stages, "warnings"_a = s.warnings);
+      "stage_seconds"_a = stages, "warnings"_a = s.warnings,
+      "force_residual"_a = std::isfinite(s.force_residual)
+                               ? py::object(py::float_(s.force_residual))
+                               : py::object(py::none()),
+      "force_residual_peak"_a = py::dict("control_point"_a = s.force_residual_peak_cp,
+                                         "acceleration"_a = s.force_residual_peak,
+                                         "top_percent_share"_a = s.force_residual_top_share));
 }
 
 // ---------------------------------------------------------------- runs
@@ -391,6 +397,16 @@ PYBIND11_MODULE(knitsim, m) {
           "…) as a dict with numpy arrays.")
       .def("kinetic_energy", &Simulator::kinetic_energy, "state"_a, "erg")
       .def("potential_energy", &Simulator::potential_energy, "state"_a, "erg")
+      .def(
+          "force_residual",
+          [](Simulator& sim, const State& s) {
+            py::gil_scoped_release release;
+            return sim.force_residual(s);
+          },
+          "state"_a,
+          "The net static force per unit mass that the constraints do not hold (cm/s²; 0 at a "
+          "rest); `data` then says where it sits (force_residual_peak: the global control "
+          "point furthest from rest, its acceleration, the share of the top 1 %).")
       .def(
           "linear_momentum",
           [](const Simulator& sim, const State& s) { return vec3(sim.linear_momentum(s)); },

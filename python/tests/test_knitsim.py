@@ -160,6 +160,28 @@ def test_a_free_yarn_falls_at_g_and_keeps_its_momentum_otherwise(tmp_path):
     assert np.allclose(sim.linear_momentum(s), momentum)
 
 
+def test_force_residual_is_small_at_rest_and_says_where_it_sits():
+    # the settled catenary is at rest: its net unheld force per unit mass is a tiny part of
+    # g; pulling one control point aside leaves a residual, largest where it was pulled
+    sc = knitsim.load_scene(str(EXAMPLES / "hanging.json"))
+    assert sc.run()["status"] == "ok"
+    sim = sc.simulator()
+    rest = sim.force_residual(sc.state)
+    assert rest < 1e-2 * G
+    data = sim.data
+    assert data["force_residual"] == pytest.approx(rest)
+    assert data["force_residual_peak"]["acceleration"] >= rest
+    moved = sc.state.copy()
+    k = len(sc.model.mass) // 2
+    q = moved.q
+    q[k, 0] += 0.05
+    pulled = sim.force_residual(moved)
+    assert pulled > 10 * rest
+    peak = sim.data["force_residual_peak"]
+    assert abs(peak["control_point"] - k) <= 3  # a point sharing a segment with it
+    assert 0.01 <= peak["top_percent_share"] <= 1.0
+
+
 def test_pins_carry_the_weight_of_a_hanging_yarn():
     # the catenary example settles; its two pins then hold the yarn's whole weight
     sc = knitsim.load_scene(str(EXAMPLES / "hanging.json"))
