@@ -179,9 +179,12 @@ py::dict step_data_dict(const StepData& s) {
       "force_residual"_a = std::isfinite(s.force_residual)
                                ? py::object(py::float_(s.force_residual))
                                : py::object(py::none()),
-      "force_residual_peak"_a = py::dict("control_point"_a = s.force_residual_peak_cp,
-                                         "acceleration"_a = s.force_residual_peak,
-                                         "top_percent_share"_a = s.force_residual_top_share));
+      "force_residual_peak"_a =
+          std::isfinite(s.force_residual)
+              ? py::object(py::dict("control_point"_a = s.force_residual_peak_cp,
+                                    "acceleration"_a = s.force_residual_peak,
+                                    "top_percent_share"_a = s.force_residual_top_share))
+              : py::object(py::none()));
 }
 
 // ---------------------------------------------------------------- runs

@@ -180,6 +180,8 @@ def test_force_residual_is_small_at_rest_and_says_where_it_sits():
     peak = sim.data["force_residual_peak"]
     assert abs(peak["control_point"] - k) <= 3  # a point sharing a segment with it
     assert 0.01 <= peak["top_percent_share"] <= 1.0
+    sim.step(moved)  # a step's data describes no residual until one is asked for
+    assert sim.data["force_residual"] is None and sim.data["force_residual_peak"] is None
 
 
 def test_pins_carry_the_weight_of_a_hanging_yarn():

@@ -249,6 +249,9 @@ void Simulator::forward(const State& state, double known_violation) {
   for (size_t k = 0; k < m_model.objects.size(); ++k)
     m_data.objects[k] = ObjectRecord{m_model.objects[k]->name};
   m_data.force_residual = std::numeric_limits<double>::quiet_NaN();
+  m_data.force_residual_peak_cp = -1;
+  m_data.force_residual_peak = 0;
+  m_data.force_residual_top_share = 0;
   m_data.static_constraints.clear();
   double e = 0;
   Eigen::Vector3d before = Eigen::Vector3d::Zero();
@@ -811,7 +814,7 @@ StepResult Simulator::step(State& state, double h) {
 }
 
 double Simulator::force_residual(const State& state) {
-  forward(state);
+  forward(state);  // (a no-op where data() already describes the state)
   m_data.static_constraints.clear();
   m_data.force_residual_peak_cp = -1;
   m_data.force_residual_peak = 0;
