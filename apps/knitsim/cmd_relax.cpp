@@ -94,7 +94,10 @@ void register_relax(CLI::App& app) {
   add_integrator_option(cmd, o->integrator);
   add_implicit_bending_option(cmd, o->implicit_bending);
   add_end_mass_floor_option(cmd, o->end_mass_floor);
-  add_contact_solve_tolerance_option(cmd, o->contact_solve_tolerance);
+  add_contact_solve_tolerance_option(
+      cmd, o->contact_solve_tolerance,
+      "; in a relaxation it iterates far more (a 12×12 rib's FIRE step at 2e-3 s took 10× the "
+      "time of one solve)");
   add_contact_reuse_option(cmd, o->contact_reuse);
   cmd->add_option("--max-time", o->run.max_time,
                   "simulated seconds at most (with --resume: seconds more)")

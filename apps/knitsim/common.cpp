@@ -120,12 +120,13 @@ void add_end_mass_floor_option(CLI::App* cmd, double& floor) {
                            knit::param_range("end_mass_floor").max));
 }
 
-void add_contact_solve_tolerance_option(CLI::App* cmd, double& tolerance) {
+void add_contact_solve_tolerance_option(CLI::App* cmd, double& tolerance, const std::string& more) {
   cmd->add_option("--contact-solve-tolerance", tolerance,
                   "with --integrator imex-contact: 0 (the default) solves each step once, "
                   "contact's coupling between segments taken at the step's start velocity; "
                   "> 0 solves the whole linear system by conjugate gradients until the "
-                  "residual is this fraction of its right-hand side (docs/model.md §5.2)")
+                  "residual is this fraction of its right-hand side (docs/model.md §5.2)" +
+                      more)
       ->check(finite_range(knit::param_range("contact_solve_tolerance").min,
                            knit::param_range("contact_solve_tolerance").max));
 }

@@ -35,11 +35,13 @@ CLI::Validator finite_positive(double hi = 1e300);
 void add_integrator_option(CLI::App* cmd, std::string& integrator);
 /// --implicit-bending (knit::SolverSettings::implicit_bending), into `implicit_bending`.
 void add_implicit_bending_option(CLI::App* cmd, bool& implicit_bending);
-/// --contact-reuse (SolverSettings::contact_reuse, yarn radii).
 /// --end-mass-floor (Discretisation::end_mass_floor, a fraction of an interior mass).
 void add_end_mass_floor_option(CLI::App* cmd, double& floor);
-/// --contact-solve-tolerance: imex-contact's conjugate-gradient tolerance (simulate, relax).
-void add_contact_solve_tolerance_option(CLI::App* cmd, double& tolerance);
+/// --contact-solve-tolerance: imex-contact's conjugate-gradient tolerance (simulate, relax);
+/// `more` is added to its help.
+void add_contact_solve_tolerance_option(CLI::App* cmd, double& tolerance,
+                                        const std::string& more = "");
+/// --contact-reuse (SolverSettings::contact_reuse, yarn radii).
 void add_contact_reuse_option(CLI::App* cmd, double& reuse);
 
 /// Adds --threads N (0 = all cores).
