@@ -181,9 +181,9 @@ py::dict step_data_dict(const StepData& s) {
                                : py::object(py::none()),
       "force_residual_peak"_a =
           std::isfinite(s.force_residual)
-              ? py::object(py::dict("control_point"_a = s.force_residual_peak_cp,
-                                    "acceleration"_a = s.force_residual_peak,
-                                    "top_percent_share"_a = s.force_residual_top_share))
+              ? py::object(py::dict("control_point"_a = s.force_residual_peak.control_point,
+                                    "acceleration"_a = s.force_residual_peak.acceleration,
+                                    "top_percent_share"_a = s.force_residual_peak.top_share))
               : py::object(py::none()));
 }
 

@@ -128,9 +128,11 @@ struct StepData {
   /// (Σ m a²) that the 1 % of control points with the most hold. A relaxation near rest
   /// creeps in a few places (a 42×32 rib at R = 2.6: 64 % in 1 % of its points, single
   /// loops and the yarn's ends).
-  int force_residual_peak_cp = -1;
-  double force_residual_peak = 0;
-  double force_residual_top_share = 0;
+  struct ResidualPeak {
+    int control_point = -1;   ///< global index; −1 none
+    double acceleration = 0;  ///< cm/s²
+    double top_share = 0;     ///< of Σ m a², in the top 1 % of control points
+  } force_residual_peak;
   /// With the force residual: what each constraint group must exert to hold the state
   /// at rest (dyn; the static reactions, −∇Cᵀ Λ for the force the terms exert along the
   /// constraints' normals at v = 0). Empty unless the residual was asked for. At an

@@ -12,7 +12,6 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "knit/filters/fire.hpp"
 #include "knit/io/import.hpp"
 #include "knit/model/model.hpp"
 #include "knit/model/state.hpp"
@@ -20,6 +19,8 @@
 #include "knit/solver/relaxation.hpp"
 
 namespace knit {
+
+class FireFilter;
 
 /// The force-residual rest threshold of FIRE relaxations unless told otherwise (cm/s²):
 /// the net force on the yarn a thousandth of its weight.

@@ -508,16 +508,16 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
   s["max_constraint_violation"] = data.max_violation;
   s["kinetic_energy"] = data.kinetic_energy;
   s["force_residual"] = finite_or_null(data.force_residual);
-  if (std::isfinite(data.force_residual) && data.force_residual_peak_cp >= 0) {
+  if (std::isfinite(data.force_residual) && data.force_residual_peak.control_point >= 0) {
     // where the state is furthest from rest, and how concentrated the residual is
-    const int cp = data.force_residual_peak_cp;
+    const int cp = data.force_residual_peak.control_point;
     const int yarn = model.yarn_of_cp(cp);
     const Eigen::Vector3d at = state.q.segment<3>(3 * cp);
     s["force_residual_peak"] = {{"yarn", yarn},
                                 {"control_point", cp - model.yarns[yarn].cp_begin},
                                 {"position_cm", {at.x(), at.y(), at.z()}},
-                                {"acceleration", data.force_residual_peak},
-                                {"top_percent_share", data.force_residual_top_share}};
+                                {"acceleration", data.force_residual_peak.acceleration},
+                                {"top_percent_share", data.force_residual_peak.top_share}};
   }
   s["potential_energy"] = data.potential_energy;
   nlohmann::json energies = nlohmann::json::object();

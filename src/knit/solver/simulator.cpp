@@ -249,9 +249,7 @@ void Simulator::forward(const State& state, double known_violation) {
   for (size_t k = 0; k < m_model.objects.size(); ++k)
     m_data.objects[k] = ObjectRecord{m_model.objects[k]->name};
   m_data.force_residual = std::numeric_limits<double>::quiet_NaN();
-  m_data.force_residual_peak_cp = -1;
-  m_data.force_residual_peak = 0;
-  m_data.force_residual_top_share = 0;
+  m_data.force_residual_peak = {};
   m_data.static_constraints.clear();
   double e = 0;
   Eigen::Vector3d before = Eigen::Vector3d::Zero();
@@ -816,9 +814,7 @@ StepResult Simulator::step(State& state, double h) {
 double Simulator::force_residual(const State& state) {
   forward(state);  // (a no-op where data() already describes the state)
   m_data.static_constraints.clear();
-  m_data.force_residual_peak_cp = -1;
-  m_data.force_residual_peak = 0;
-  m_data.force_residual_top_share = 0;
+  m_data.force_residual_peak = {};
   const int n = m_model.num_cp();
   Eigen::VectorXd zero = Eigen::VectorXd::Zero(state.q.size()), force;
   // exactly: no term reuses an earlier evaluation's model of its force here
@@ -852,17 +848,14 @@ double Simulator::force_residual(const State& state) {
       residual += share[k];
       mass += m_model.mass[k];
       const double peak = std::sqrt(share[k] / m_model.mass[k]) / eps;
-      if (peak > m_data.force_residual_peak) {
-        m_data.force_residual_peak = peak;
-        m_data.force_residual_peak_cp = k;
-      }
+      if (peak > m_data.force_residual_peak.acceleration) m_data.force_residual_peak = {k, peak, 0};
     }
     if (residual > 0) {
       const int top = std::max(1, n / 100);
       std::nth_element(share.begin(), share.begin() + (top - 1), share.end(), std::greater<>());
       double sum = 0;
       for (int k = 0; k < top; ++k) sum += share[k];
-      m_data.force_residual_top_share = sum / residual;
+      m_data.force_residual_peak.top_share = sum / residual;
     }
     residual = mass > 0 ? std::sqrt(residual / mass) / eps : 0;
   }
