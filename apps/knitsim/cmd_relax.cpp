@@ -26,6 +26,7 @@ void register_relax(CLI::App& app) {
     double time_step = knit::relax_knit_params().solver.time_step;
     double contact_reuse = 0, contact_solve_tolerance = 0, end_mass_floor = 0;
     bool implicit_bending = false;
+    int max_step_halvings = 0;
     double shrink = knit::RELAX_SHRINK;
     int threads = 0;
     bool quiet = false, no_frames = false, overwrite = false, fire = false;
@@ -94,6 +95,7 @@ void register_relax(CLI::App& app) {
   add_integrator_option(cmd, o->integrator);
   add_implicit_bending_option(cmd, o->implicit_bending);
   add_end_mass_floor_option(cmd, o->end_mass_floor);
+  add_max_step_halvings_option(cmd, o->max_step_halvings);
   add_contact_solve_tolerance_option(
       cmd, o->contact_solve_tolerance,
       "; in a relaxation it iterates far more (a 12×12 rib's FIRE step at 2e-3 s took 10× the "
@@ -169,6 +171,16 @@ void register_relax(CLI::App& app) {
     o->run.write_frames = !o->no_frames;
     auto control = make_thread_control(o->threads);
     knit::RelaxResult result;
+    // the solver's options, the same for imported yarns and for a knit
+    auto set_solver = [&](knit::Params& p) {
+      p.solver.integrator = knit::parse_integrator(o->integrator);
+      p.solver.contact_reuse = o->contact_reuse;
+      p.solver.contact_solve_tolerance = o->contact_solve_tolerance;
+      p.solver.implicit_bending = o->implicit_bending;
+      p.solver.max_step_halvings = o->max_step_halvings;
+      p.discretisation.contact_points = o->contact_points;
+      p.discretisation.end_mass_floor = o->end_mass_floor;
+    };
     if (!o->from.empty()) {
       // the recipe's defaults for imported yarns, overridden by what was given
       knit::Params& p = o->yarns.params;
@@ -176,12 +188,7 @@ void register_relax(CLI::App& app) {
       if (given("--alpha-small")) p.material.alpha_small = o->material.alpha_small;
       if (given("--alpha-large")) p.material.alpha_large = o->material.alpha_large;
       if (given("--time-step")) p.solver.time_step = o->time_step;
-      p.solver.integrator = knit::parse_integrator(o->integrator);
-      p.solver.contact_reuse = o->contact_reuse;
-      p.solver.contact_solve_tolerance = o->contact_solve_tolerance;
-      p.solver.implicit_bending = o->implicit_bending;
-      p.discretisation.contact_points = o->contact_points;
-      p.discretisation.end_mass_floor = o->end_mass_floor;
+      set_solver(p);
       o->yarns.shrink = o->shrink;
       o->yarns.run = o->run;
       add_provenance(o->yarns.extra);
@@ -189,13 +196,8 @@ void register_relax(CLI::App& app) {
     } else {
       knit::Params& p = o->knit.params;
       p.material = o->material;
-      p.discretisation.contact_points = o->contact_points;
-      p.discretisation.end_mass_floor = o->end_mass_floor;
       p.solver.time_step = o->time_step;
-      p.solver.integrator = knit::parse_integrator(o->integrator);
-      p.solver.contact_reuse = o->contact_reuse;
-      p.solver.contact_solve_tolerance = o->contact_solve_tolerance;
-      p.solver.implicit_bending = o->implicit_bending;
+      set_solver(p);
       o->knit.shrink = o->shrink;
       o->knit.fire = o->fire;
       o->knit.run = o->run;

@@ -19,7 +19,7 @@ void register_simulate(CLI::App& app) {
     bool quiet = false, overwrite = false, implicit_bending = false;
     std::string export_format, integrator;
     double time_step = 0, contact_solve_tolerance = 0, contact_reuse = 0;
-    int output_every = 0;
+    int output_every = 0, max_step_halvings = 0;
   };
   auto opts = std::make_shared<Opts>();
   CLI::App* cmd = app.add_subcommand("simulate", "run a scene file (JSON) and write its states");
@@ -46,6 +46,7 @@ void register_simulate(CLI::App& app) {
                                      "; a simulation step then takes about twice the wall time; "
                                      "overrides the scene's contact_solve_tolerance");
   add_contact_reuse_option(cmd, opts->contact_reuse);
+  add_max_step_halvings_option(cmd, opts->max_step_halvings);
   cmd->add_option("--output-every", opts->output_every,
                   "override the scene's steps between written states and log rows")
       ->check(CLI::Range(1, 1'000'000'000));
@@ -63,6 +64,8 @@ void register_simulate(CLI::App& app) {
       scene.model.params.solver.contact_solve_tolerance = opts->contact_solve_tolerance;
     if (cmd->count("--contact-reuse"))
       scene.model.params.solver.contact_reuse = opts->contact_reuse;
+    if (cmd->count("--max-step-halvings"))
+      scene.model.params.solver.max_step_halvings = opts->max_step_halvings;
     if (cmd->count("--output-every")) scene.output_every = opts->output_every;
     if (cmd->count("--duration")) {
       knit::check_duration(opts->duration, scene.model.params.solver.time_step);

@@ -103,6 +103,7 @@ void register_stretch(CLI::App& app) {
       ->check(finite_range(knit::param_range("yarn_friction").min,
                            knit::param_range("yarn_friction").max));
   add_end_mass_floor_option(cmd, o->stretch.params.discretisation.end_mass_floor);
+  add_max_step_halvings_option(cmd, o->stretch.params.solver.max_step_halvings);
   cmd->add_option("--rows", o->relax.knit.rows, "rows of the PATTERN's sample")
       ->check(CLI::Range(2, 1'000'000));
   cmd->add_option("--cols", o->relax.knit.cols, "stitches per row of the PATTERN's sample")
@@ -162,16 +163,16 @@ void register_stretch(CLI::App& app) {
     if (cmd->count("--integrator"))
       o->stretch.params.solver.integrator = knit::parse_integrator(o->integrator);
     o->stretch.params.solver.implicit_bending = o->implicit_bending;
-    if (o->use_sheet && (cmd->count("--hold") + cmd->count("--hold-time") +
-                             cmd->count("--hold-damped") + cmd->count("--time-step") +
-                             cmd->count("--integrator") + cmd->count("--implicit-bending") +
-                             cmd->count("--yarn-friction") + cmd->count("--end-mass-floor") >
-                         0))
+    if (o->use_sheet &&
+        (cmd->count("--hold") + cmd->count("--hold-time") + cmd->count("--hold-damped") +
+             cmd->count("--time-step") + cmd->count("--integrator") +
+             cmd->count("--implicit-bending") + cmd->count("--yarn-friction") +
+             cmd->count("--end-mass-floor") + cmd->count("--max-step-halvings") >
+         0))
       throw std::invalid_argument(
           "stretch --sheet: the sheet is pulled through equilibria already; --hold, "
           "--hold-time, --hold-damped, --time-step, --integrator, --implicit-bending, "
-          "--yarn-friction and "
-          "--end-mass-floor are for the yarn model");
+          "--yarn-friction, --end-mass-floor and --max-step-halvings are for the yarn model");
     if ((cmd->count("--hold-time") || o->stretch.hold_damped) && !cmd->count("--hold"))
       throw std::invalid_argument("stretch: --hold-time and --hold-damped need --hold");
     o->stretch.out_dir = o->out;

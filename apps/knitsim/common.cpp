@@ -120,6 +120,17 @@ void add_end_mass_floor_option(CLI::App* cmd, double& floor) {
                            knit::param_range("end_mass_floor").max));
 }
 
+void add_max_step_halvings_option(CLI::App* cmd, int& halvings) {
+  cmd->add_option("--max-step-halvings", halvings,
+                  "a step that fails (the yarn torn apart in it, a value not finite, the "
+                  "projection not converged) is taken again in two halves, up to this many "
+                  "times (h/2ⁿ), and the halved step kept for 20 steps before h is tried "
+                  "again; the summary's step_halvings counts them (default 0: the run stops "
+                  "at the first failed step)")
+      ->check(CLI::Range(static_cast<int>(knit::param_range("max_step_halvings").min),
+                         static_cast<int>(knit::param_range("max_step_halvings").max)));
+}
+
 void add_contact_solve_tolerance_option(CLI::App* cmd, double& tolerance, const std::string& more) {
   cmd->add_option("--contact-solve-tolerance", tolerance,
                   "with --integrator imex-contact: 0 (the default) solves each step once, "

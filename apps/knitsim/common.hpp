@@ -41,6 +41,9 @@ void add_end_mass_floor_option(CLI::App* cmd, double& floor);
 /// `more` is added to its help.
 void add_contact_solve_tolerance_option(CLI::App* cmd, double& tolerance,
                                         const std::string& more = "");
+/// --max-step-halvings (SolverSettings::max_step_halvings: a failed step taken again in
+/// halves, step_halving.hpp).
+void add_max_step_halvings_option(CLI::App* cmd, int& halvings);
 /// --contact-reuse (SolverSettings::contact_reuse, yarn radii).
 void add_contact_reuse_option(CLI::App* cmd, double& reuse);
 

@@ -255,7 +255,7 @@ TEST(Cli, RelaxTakesTheSolverOptions) {
   const Result r =
       run("relax garter --rows 3 --cols 3 --fire --integrator imex-contact --time-step 6e-4 "
           "--implicit-bending --contact-solve-tolerance 0.01 --end-mass-floor 0.5 --max-time 0.03 "
-          "--check-every 25 --quiet --no-frames --out " +
+          "--max-step-halvings 2 --check-every 25 --quiet --no-frames --out " +
           out);
   ASSERT_EQ(r.code, 0) << r.output;
   std::ifstream in(out + "/summary.json");
@@ -263,6 +263,8 @@ TEST(Cli, RelaxTakesTheSolverOptions) {
   EXPECT_TRUE(s["params"]["solver"]["implicit_bending"].get<bool>());
   EXPECT_EQ(s["params"]["solver"]["contact_solve_tolerance"].get<double>(), 0.01);
   EXPECT_EQ(s["params"]["discretisation"]["end_mass_floor"].get<double>(), 0.5);
+  EXPECT_EQ(s["params"]["solver"]["max_step_halvings"].get<int>(), 2);
+  EXPECT_GE(s["step_halvings"]["substeps"].get<long long>(), s["steps"].get<long long>());
   EXPECT_GT(s["implicit_solve"]["steps"].get<long long>(), 0);  // the solve iterated
   EXPECT_GE(s["fire_restarts"].get<long long>(), 0);
   // where the residual sits: its largest point's acceleration is at least the RMS, and the
@@ -273,7 +275,8 @@ TEST(Cli, RelaxTakesTheSolverOptions) {
   EXPECT_LE(peak["top_percent_share"].get<double>(), 1.0);
   EXPECT_EQ(peak["yarn"].get<int>(), 0);
   EXPECT_EQ(peak["position_cm"].size(), 3u);
-  for (const char* bad : {"--end-mass-floor 2", "--contact-solve-tolerance 5"}) {
+  for (const char* bad :
+       {"--end-mass-floor 2", "--contact-solve-tolerance 5", "--max-step-halvings 30"}) {
     const Result refused = run(std::string("relax garter --integrator imex-contact ") + bad +
                                " --out " + out + "_bad");
     EXPECT_NE(refused.code, 0);

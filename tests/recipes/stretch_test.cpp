@@ -196,6 +196,26 @@ TEST(Stretch, AnUnstablePullIsRenderedUpToWhereItStopped) {
   EXPECT_TRUE(fs::exists(o.out_dir + "/last_good.kstate"));
 }
 
+// Halving a failed step does not rescue a pull whose long steps were unstable for a while
+// before one failed (here 3e-4 s, 4× beyond the explicit limit: the oscillation grows for
+// a dozen steps first): the halved steps fail too, and the summary says how far it halved.
+// (Where the step fails at a sound state it goes on: step_halving_test.cpp.)
+TEST(Stretch, HalvingDoesNotRescueAPullLongUnstable) {
+  StretchOptions o;
+  o.to_strain = 0.3;
+  o.speed = 50;
+  o.progress = false;
+  o.params.solver.time_step = 3e-4;
+  o.params.solver.max_step_halvings = 3;
+  const StretchResult r = stretch_knit(relaxed_sample(), o);
+  ASSERT_EQ(r.report.summary["status"], "unstable") << r.report.summary.dump(2);
+  EXPECT_NE(r.report.message.find("halved 3 times, to 3.75e-05 s"), std::string::npos)
+      << r.report.message;
+  const auto& halvings = r.report.summary["step_halvings"];
+  EXPECT_EQ(halvings["deepest"].get<int>(), 3) << halvings.dump();
+  EXPECT_EQ(r.report.summary["params"]["solver"]["max_step_halvings"].get<int>(), 3);
+}
+
 // --from a relative path is read from the working directory (not from beside itself)
 TEST(Stretch, ARelativePathIsReadFromTheWorkingDirectory) {
   const fs::path sample = relaxed_sample(), cwd = fs::current_path();

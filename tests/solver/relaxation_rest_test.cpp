@@ -99,6 +99,44 @@ TEST(Fire, StopsUphillAndTurnsTowardTheForceDownhill) {
     EXPECT_EQ(v2.norm(), 0.0);
 }
 
+// A step thrown away after FIRE saw it (steps taken again in halves, step_halving.hpp)
+// leaves no trace: FIRE then steers the step taken again exactly as it would have
+// without the rejected one, restarts and α included.
+TEST(Fire, ARejectedStepLeavesNoTrace) {
+  ModelBuilder b;
+  b.add_yarn(line(3, 1.5));
+  const Model m = b.build(Params{});
+  const int n = m.num_dof();
+  const double h = 1e-3;
+  const Eigen::VectorXd q = b.positions();
+  const Eigen::VectorXd v0 = Eigen::VectorXd::Random(n);
+  for (const double uphill : {-0.5, 0.5}) {  // the rejected step uphill (a restart) or not
+    FireFilter kept, rejecting;
+    Eigen::VectorXd a = v0, c = v0;
+    kept.apply(m, q, a, 0, h);
+    rejecting.apply(m, q, c, 0, h);
+    for (int i = 1; i <= 8; ++i) {  // a few downhill steps: α decays past N_MIN
+      Eigen::VectorXd step = 1.01 * a;
+      a = step;
+      c = step;
+      kept.apply(m, q, a, i * h, h);
+      rejecting.apply(m, q, c, i * h, h);
+    }
+    ASSERT_LT(kept.alpha(), FireFilter::ALPHA_START);
+    Eigen::VectorXd thrown = (1 + uphill) * c;
+    rejecting.apply(m, q, thrown, 9 * h, h);
+    EXPECT_EQ(rejecting.restarts(), uphill < 0 ? 1 : 0);
+    rejecting.reject_step();
+    rejecting.reject_step();  // a second call changes nothing
+    Eigen::VectorXd again = 1.02 * c, same = 1.02 * a;
+    rejecting.apply(m, q, again, 9 * h, h);
+    kept.apply(m, q, same, 9 * h, h);
+    EXPECT_EQ(again, same);
+    EXPECT_EQ(rejecting.restarts(), kept.restarts());
+    EXPECT_EQ(rejecting.alpha(), kept.alpha());
+  }
+}
+
 // FIRE minimises: a yarn bent into a half circle in free space (no gravity, no damping)
 // relaxes toward straight, where the undamped yarn only swings about it with its energy
 // unspent.

@@ -38,6 +38,9 @@ class FireFilter : public VelocityFilter {
   std::string_view name() const override { return "fire"; }
   void apply(const Model& model, const Eigen::VectorXd& q, Eigen::VectorXd& v, double time,
              double h) override;
+  /// Back to before the last apply (its output, α, the downhill run and the restart
+  /// count), so that the step taken again compares with the velocities it starts from.
+  void reject_step() override;
 
   /// Forgets the last output and starts again at α_START (a new relaxation, e.g. after a
   /// clamp moved); the restart count is kept.
@@ -45,6 +48,7 @@ class FireFilter : public VelocityFilter {
     m_has_prev = false;
     m_alpha = ALPHA_START;
     m_downhill = 0;
+    m_can_reject = false;
   }
   /// Times the yarn was stopped because it went uphill (P ≤ 0).
   long long restarts() const { return m_restarts; }
@@ -56,6 +60,15 @@ class FireFilter : public VelocityFilter {
   double m_alpha = ALPHA_START;
   int m_downhill = 0;
   long long m_restarts = 0;
+  // as they were before the last apply (reject_step)
+  struct Saved {
+    bool has_prev = false;
+    double alpha = ALPHA_START;
+    int downhill = 0;
+    long long restarts = 0;
+  } m_saved;
+  Eigen::VectorXd m_saved_prev;
+  bool m_can_reject = false;
 };
 
 }  // namespace knit

@@ -31,6 +31,7 @@ void HoldRelaxFilter::begin_step(const StepData& start, const Eigen::VectorXd& q
 void HoldRelaxFilter::apply(const Model& model, const Eigen::VectorXd& q, Eigen::VectorXd& v,
                             double time, double h) {
   const int w = window_at(time);
+  m_window_before = m_window;
   m_outside_last = w < 0;
   if (w < 0) {
     for (auto& f : m_outside) f->apply(model, q, v, time, h);
@@ -46,6 +47,14 @@ bool HoldRelaxFilter::adjust_positions(const Model& model, Eigen::VectorXd& q) c
   bool moved = false;
   for (const auto& f : m_outside) moved = f->adjust_positions(model, q) || moved;
   return moved;
+}
+
+void HoldRelaxFilter::reject_step() {
+  if (m_outside_last)
+    for (auto& f : m_outside) f->reject_step();
+  else
+    m_fire.reject_step();
+  m_window = m_window_before;
 }
 
 void HoldRelaxFilter::record(StepData& data) const {

@@ -30,6 +30,7 @@ class HoldRelaxFilter : public VelocityFilter {
   void apply(const Model& model, const Eigen::VectorXd& q, Eigen::VectorXd& v, double time,
              double h) override;
   bool adjust_positions(const Model& model, Eigen::VectorXd& q) const override;
+  void reject_step() override;
   void record(StepData& data) const override;
 
   /// The window the time falls in, or −1.
@@ -41,6 +42,7 @@ class HoldRelaxFilter : public VelocityFilter {
   std::vector<std::pair<double, double>> m_windows;
   FireFilter m_fire;
   int m_window = -1;           // the window of the last apply (−1: outside)
+  int m_window_before = -1;    // and of the apply before it (reject_step)
   bool m_outside_last = true;  // whether the last apply ran the wrapped filters
 };
 

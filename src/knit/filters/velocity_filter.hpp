@@ -30,6 +30,11 @@ class VelocityFilter {
   /// position update should have seen it; returns whether it moved any. The collision
   /// filter does (see collision_filter.hpp); the default moves nothing.
   virtual bool adjust_positions(const Model& model, Eigen::VectorXd& q) const { return false; }
+  /// The step whose apply this filter last ran was thrown away (it failed after the
+  /// filters: a yarn torn apart, a value not finite) and will be taken again from where it
+  /// started: a filter that keeps something from one step to the next puts it back as it
+  /// was before that apply. The default keeps nothing.
+  virtual void reject_step() {}
   /// Writes what the last apply found and did into the step data (the collision filter:
   /// contacts, penetration, impulse). Called by the simulator after the step's forward at
   /// its result.

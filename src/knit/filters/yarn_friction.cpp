@@ -55,6 +55,8 @@ void YarnFrictionFilter::begin_step(const StepData& start, const Eigen::VectorXd
 
 void YarnFrictionFilter::apply(const Model& model, const Eigen::VectorXd& q, Eigen::VectorXd& v,
                                double /*time*/, double h) {
+  m_kept_before = m_kept;  // the warm start, for a step thrown away (reject_step)
+  m_can_reject = true;
   m_h = h;
   m_record = FrictionRecord{};
   m_record.present = true;
@@ -150,6 +152,12 @@ bool YarnFrictionFilter::adjust_positions(const Model& /*model*/, Eigen::VectorX
 
 void YarnFrictionFilter::record(StepData& data) const {
   data.friction = m_record;
+}
+
+void YarnFrictionFilter::reject_step() {
+  if (!m_can_reject) return;
+  m_can_reject = false;
+  m_kept.swap(m_kept_before);
 }
 
 }  // namespace knit

@@ -56,6 +56,8 @@ class YarnFrictionFilter : public VelocityFilter {
              double h) override;
   bool adjust_positions(const Model& model, Eigen::VectorXd& q) const override;
   /// data.friction: pairs, how many stuck, the energy dissipated, the force.
+  /// Back to the warm start before the last apply.
+  void reject_step() override;
   void record(StepData& data) const override;
   double mu() const { return m_mu; }
 
@@ -82,7 +84,8 @@ class YarnFrictionFilter : public VelocityFilter {
     int seg_i, seg_j;
     Eigen::Vector3d lambda;
   };
-  std::vector<Kept> m_kept;
+  std::vector<Kept> m_kept, m_kept_before;
+  bool m_can_reject = false;
   Eigen::VectorXd m_dv;  // the filter's Δv on the control points
   FrictionRecord m_record;
 };

@@ -29,6 +29,7 @@ const std::vector<ParamRange>& param_ranges() {
       {"contact_reuse", 0, 1, "yarn radii"},
       {"constraint_tolerance", 1e-12, 1, ""},
       {"max_projection_iterations", 1, 10000, ""},
+      {"max_step_halvings", 0, 20, "halvings of the time step"},
   };
   return ranges;
 }
@@ -95,6 +96,7 @@ void validate_params(const Params& p) {
                                 "the linearisation reused)");
   check_param("constraint_tolerance", p.solver.constraint_tolerance);
   check_param("max_projection_iterations", p.solver.max_projection_iterations);
+  check_param("max_step_halvings", p.solver.max_step_halvings);
   for (int c = 0; c < 3; ++c)
     if (!std::isfinite(p.gravity[c]) || std::abs(p.gravity[c]) > 1e5)
       throw std::invalid_argument("gravity[" + std::to_string(c) +

@@ -87,6 +87,11 @@ struct SolverSettings {
   double constraint_tolerance = 1e-6;  ///< projection stops when max |C| is below (C_len is
                                        ///< dimensionless, pin/glue/clamp rows in cm)
   int max_projection_iterations = 20;
+  /// A step that fails (unstable, non-finite, projection not converged) is taken again
+  /// from where it started in two halves, and so on, up to this many halvings (h / 2ⁿ);
+  /// the halved step is kept for a while before the step tries h again (the runner,
+  /// runner.hpp). 0 (the default) stops the run at the first failed step.
+  int max_step_halvings = 0;
 };
 
 struct Params {

@@ -232,6 +232,9 @@ RelaxResult relax_knit(const std::string& pattern_name, const RelaxKnitOptions& 
 
   RelaxOptions run = o.run;
   if (o.fire && run.force_residual == 0) run.force_residual = RELAX_FIRE_RESIDUAL;
+  // a step halved (max_step_halvings) doubles again after 20 good ones: an oscillation a
+  // too-long step grows before it fails is an uphill motion, which FIRE stops at once
+  if (o.fire && run.halving_calm_steps == 0) run.halving_calm_steps = 20;
   nlohmann::json extra = {{"pattern", pattern_name},
                           {"method", o.fire ? "fire" : "damped_dynamics"},
                           {"rows", o.knit.rows},

@@ -343,6 +343,7 @@ Params parse_params(const JsonReader& r, Params p) {
                 "contact_solve_tolerance",
                 "contact_reuse",
                 "max_projection_iterations",
+                "max_step_halvings",
                 "time_step",
                 "integrator",
                 "implicit_bending"});
@@ -389,6 +390,7 @@ Params parse_params(const JsonReader& r, Params p) {
     p.solver.constraint_tolerance = r.at("constraint_tolerance").positive();
   if (r.has("max_projection_iterations"))
     p.solver.max_projection_iterations = r.at("max_projection_iterations").integer(1);
+  if (r.has("max_step_halvings")) p.solver.max_step_halvings = r.at("max_step_halvings").integer(0);
   if (r.has("time_step")) p.solver.time_step = r.at("time_step").positive();
   if (r.has("integrator")) {
     try {

@@ -35,6 +35,7 @@ RunReport relax(Simulator& sim, State& state, const RelaxOptions& o, nlohmann::j
   run.write_frames = o.write_frames;
   run.continue_in_place = o.continue_in_place;
   run.resume_command = o.resume_command;
+  run.halving_calm_steps = o.halving_calm_steps;
   const bool residual_test = o.force_residual > 0;
   // every check measures the force residual (a force evaluation and two projections per
   // check_every steps), so that the log shows how far from rest a run is by both tests

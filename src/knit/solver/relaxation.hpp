@@ -31,6 +31,7 @@ struct RelaxOptions {
   /// RunOptions::continue_in_place).
   bool continue_in_place = false;
   std::string resume_command;  ///< written into the summary of an interrupted run
+  int halving_calm_steps = 0;  ///< RunOptions::halving_calm_steps
 };
 
 /// Throws std::invalid_argument naming the option when a RelaxOptions field is out of

@@ -22,6 +22,7 @@
 #include "knit/io/input_file.hpp"
 #include "knit/io/state_file.hpp"
 #include "knit/solver/interrupt.hpp"
+#include "knit/solver/step_halving.hpp"
 
 namespace knit {
 
@@ -137,7 +138,8 @@ nlohmann::json params_json(const Params& p) {
             {"contact_reuse", p.solver.contact_reuse},
             {"length_constraints", p.solver.length_constraints},
             {"constraint_tolerance", p.solver.constraint_tolerance},
-            {"max_projection_iterations", p.solver.max_projection_iterations}}},
+            {"max_projection_iterations", p.solver.max_projection_iterations},
+            {"max_step_halvings", p.solver.max_step_halvings}}},
           {"gravity", vec_json(p.gravity)}};
 }
 
@@ -388,10 +390,11 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
   }
   bool stopped_early = false;
   int signal = 0;
+  HalvingStepper stepper(model.params.solver.max_step_halvings, opt.halving_calm_steps);
   while (report.status == StepStatus::OK) {
     const double hs = next_step_length(state.time, end_time, h);
     if (hs == 0) break;
-    const StepResult res = sim.step(state, hs);
+    const StepResult res = stepper.step(sim, state, hs);
     if (!res.ok()) {
       report.status = res.status;
       report.message = res.message;
@@ -494,6 +497,10 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
         "the duration is not a multiple of the time step: the last steps were "
         "shortened to end at the time asked";
   }
+  if (model.params.solver.max_step_halvings > 0)
+    s["step_halvings"] = {{"retried", stepper.retried()},
+                          {"deepest", stepper.deepest()},
+                          {"substeps", stepper.substeps()}};
   s["wall_time_s"] = wall;
   // wall seconds per simulated second of this run (not counting what a resumed run did)
   if (state.time > start_time) s["wall_s_per_simulated_s"] = wall / (state.time - start_time);

@@ -36,6 +36,9 @@ struct RunOptions {
   std::string resume_command;
   bool progress = true;  ///< progress line on stderr for runs over ~2 s
   bool write_frames = true;
+  /// With SolverSettings::max_step_halvings: steps that pass at a halved step before it
+  /// doubles again (HalvingStepper); 0 (the default) keeps the halved step to the end.
+  int halving_calm_steps = 0;
   /// Optional measurement at every output step, before the log row and the state are
   /// written, that StepData should carry into them (relaxations: the force residual).
   std::function<void(Simulator&, const State&)> before_output;

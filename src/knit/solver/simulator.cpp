@@ -743,12 +743,16 @@ StepResult Simulator::step(State& state, double h) {
   apply_filters(m_qnew, m_vnew, t_new, h);
   bool moved = false;
   for (const auto& f : m_filters) moved = f->adjust_positions(m_model, m_qnew) || moved;
-  if (!m_qnew.allFinite() || !m_vnew.allFinite()) {
+  // from here a failed step is thrown away after the filters saw it: they forget it
+  auto reject = [&](std::string message) {
+    for (auto& f : m_filters) f->reject_step();
     res.status = StepStatus::NON_FINITE;
-    res.message = "positions or velocities became non-finite at t = " + std::to_string(t_new) +
-                  " s; try a smaller time step";
+    res.message = std::move(message);
     return res;
-  }
+  };
+  if (!m_qnew.allFinite() || !m_vnew.allFinite())
+    return reject("positions or velocities became non-finite at t = " + std::to_string(t_new) +
+                  " s; try a smaller time step");
   // a step that moves a control point more than a yarn diameter relative to its
   // neighbour has torn the yarn's shape apart (two neighbours each moving a radius the
   // opposite way): the run is no longer trustworthy. Rigid motion, however fast, is not
@@ -763,9 +767,7 @@ StepResult Simulator::step(State& state, double h) {
         << travel.relative << " cm relative to its neighbour in one step at t = " << t_new
         << " s, more than the yarn diameter (" << limit
         << " cm): the run is unstable; try a smaller time step";
-    res.status = StepStatus::NON_FINITE;
-    res.message = msg.str();
-    return res;
+    return reject(msg.str());
   }
   state.q.swap(m_qnew);
   state.v.swap(m_vnew);
