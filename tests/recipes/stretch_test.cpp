@@ -197,7 +197,7 @@ TEST(Stretch, AnUnstablePullIsRenderedUpToWhereItStopped) {
 }
 
 // Halving a failed step does not rescue a pull whose long steps were unstable for a while
-// before one failed (here 3e-4 s, 4× beyond the explicit limit: the oscillation grows for
+// before one failed (here 3e-4 s, 3.5× the default step: the oscillation grows for
 // a dozen steps first): the halved steps fail too, and the summary says how far it halved.
 // (Where the step fails at a sound state it goes on: step_halving_test.cpp.)
 TEST(Stretch, HalvingDoesNotRescueAPullLongUnstable) {
