@@ -163,15 +163,21 @@ TEST(Stretch, APullKnownToMisleadSaysSoInItsSummary) {
   EXPECT_EQ(r.report.summary["caveats"][0], stretch_caveats(o)[0]);
 }
 
-// A pull that becomes unstable (here a step of 3e-4 s, beyond the explicit step's limit,
-// and a fast pull) stops with its outputs up to the last strain it reached, renders
-// included: the strains it passed and the last one, which the summary names.
-TEST(Stretch, AnUnstablePullIsRenderedUpToWhereItStopped) {
+// A fast pull to strain 0.3 at a step of 3e-4 s, beyond the explicit step's limit.
+StretchOptions unstable_pull() {
   StretchOptions o;
   o.to_strain = 0.3;
   o.speed = 50;
   o.progress = false;
   o.params.solver.time_step = 3e-4;
+  return o;
+}
+
+// A pull that becomes unstable (unstable_pull) stops with its outputs up to the last strain
+// it reached, renders included: the strains it passed and the last one, which the summary
+// names.
+TEST(Stretch, AnUnstablePullIsRenderedUpToWhereItStopped) {
+  StretchOptions o = unstable_pull();
   o.out_dir = (fs::path(::testing::TempDir()) / "stretch_unstable").string();
   o.overwrite = true;
   o.render_width = 64;
@@ -201,11 +207,7 @@ TEST(Stretch, AnUnstablePullIsRenderedUpToWhereItStopped) {
 // a dozen steps first): the halved steps fail too, and the summary says how far it halved.
 // (Where the step fails at a sound state it goes on: step_halving_test.cpp.)
 TEST(Stretch, HalvingDoesNotRescueAPullLongUnstable) {
-  StretchOptions o;
-  o.to_strain = 0.3;
-  o.speed = 50;
-  o.progress = false;
-  o.params.solver.time_step = 3e-4;
+  StretchOptions o = unstable_pull();
   o.params.solver.max_step_halvings = 3;
   const StretchResult r = stretch_knit(relaxed_sample(), o);
   ASSERT_EQ(r.report.summary["status"], "unstable") << r.report.summary.dump(2);
