@@ -80,6 +80,15 @@ TEST(SceneErrors, NegativeOrNonFiniteParametersAreRejected) {
       parse_scene(nlohmann::json::parse(scene_with(R"(, "params": {"implicit_bending": true})")),
                   "scene.json")
           .model.params.solver.implicit_bending);
+  expect_error(scene_with(R"(, "params": {"max_step_halvings": 25})"),
+               {"max_step_halvings", "[0, 20]"});
+  expect_error(scene_with(R"(, "params": {"max_step_halvings": 1.5})"),
+               {"params.max_step_halvings", "integer"});
+  EXPECT_EQ(
+      parse_scene(nlohmann::json::parse(scene_with(R"(, "params": {"max_step_halvings": 3})")),
+                  "scene.json")
+          .model.params.solver.max_step_halvings,
+      3);
   expect_error(scene_with(R"(, "params": {"quadrature_points": 10})"),
                {"quadrature_points", "odd"});
   // JSON text has no NaN literal, but a document built in code can hold one
