@@ -91,7 +91,7 @@ void register_relax(CLI::App& app) {
   cmd->add_option(
          "--time-step", o->time_step,
          "s (default 1/11800; 1/25000 with --from: imported swatches start tightly packed)")
-      ->check(finite_range(knit::param_range("time_step").min, knit::param_range("time_step").max));
+      ->check(param_check("time_step"));
   add_integrator_option(cmd, o->integrator);
   add_implicit_bending_option(cmd, o->implicit_bending);
   add_end_mass_floor_option(cmd, o->end_mass_floor);

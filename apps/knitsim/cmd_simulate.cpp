@@ -39,7 +39,7 @@ void register_simulate(CLI::App& app) {
   cmd->add_option("--duration", opts->duration, "override the scene's duration (s)")
       ->check(finite_positive(knit::MAX_DURATION));
   cmd->add_option("--time-step", opts->time_step, "override the scene's time step (s)")
-      ->check(finite_range(knit::param_range("time_step").min, knit::param_range("time_step").max));
+      ->check(param_check("time_step"));
   add_integrator_option(cmd, opts->integrator);
   add_implicit_bending_option(cmd, opts->implicit_bending);
   add_contact_solve_tolerance_option(cmd, opts->contact_solve_tolerance,

@@ -68,7 +68,7 @@ void register_stretch(CLI::App& app) {
                 "with --hold: hold with the simulation's damping instead of FIRE (a "
                 "stress-relaxation test)");
   cmd->add_option("--time-step", o->time_step, "time step of the yarn model (s)")
-      ->check(finite_range(knit::param_range("time_step").min, knit::param_range("time_step").max));
+      ->check(param_check("time_step"));
   add_integrator_option(cmd, o->integrator);
   add_implicit_bending_option(cmd, o->implicit_bending);
   cmd->add_option("--clamp-stitches", o->stretch.clamp_stitches,
@@ -100,8 +100,7 @@ void register_stretch(CLI::App& app) {
   cmd->add_option("--yarn-friction", o->stretch.params.material.yarn_friction,
                   "yarn–yarn Coulomb friction coefficient (default 0: the paper's model, "
                   "viscous contact damping only)")
-      ->check(finite_range(knit::param_range("yarn_friction").min,
-                           knit::param_range("yarn_friction").max));
+      ->check(param_check("yarn_friction"));
   add_end_mass_floor_option(cmd, o->stretch.params.discretisation.end_mass_floor);
   add_max_step_halvings_option(cmd, o->stretch.params.solver.max_step_halvings);
   cmd->add_option("--rows", o->relax.knit.rows, "rows of the PATTERN's sample")

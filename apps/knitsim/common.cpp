@@ -65,6 +65,11 @@ CLI::Validator finite_range(double lo, double hi) {
       "FLOAT " + desc);
 }
 
+CLI::Validator param_check(const std::string& name) {
+  const knit::ParamRange& r = knit::param_range(name);
+  return finite_range(r.min, r.max);
+}
+
 CLI::Validator finite_positive(double hi) {
   const std::string desc = hi < 1e300 ? "in (0, " + knit::short_number(hi) + "]" : "> 0";
   return CLI::Validator(
@@ -116,8 +121,7 @@ void add_end_mass_floor_option(CLI::App* cmd, double& floor) {
                   "each yarn end's two control points get at least this fraction of an interior "
                   "one's mass (default 0: the row sums, 1/24 at the last point; 0.5 stops a free "
                   "end jittering when nothing damps it, as with --yarn-friction)")
-      ->check(finite_range(knit::param_range("end_mass_floor").min,
-                           knit::param_range("end_mass_floor").max));
+      ->check(param_check("end_mass_floor"));
 }
 
 void add_max_step_halvings_option(CLI::App* cmd, int& halvings) {
@@ -127,8 +131,7 @@ void add_max_step_halvings_option(CLI::App* cmd, int& halvings) {
                   "times (h/2ⁿ), and the halved step kept for 20 steps before h is tried "
                   "again; the summary's step_halvings counts them (default 0: the run stops "
                   "at the first failed step)")
-      ->check(CLI::Range(static_cast<int>(knit::param_range("max_step_halvings").min),
-                         static_cast<int>(knit::param_range("max_step_halvings").max)));
+      ->check(param_check("max_step_halvings"));
 }
 
 void add_contact_solve_tolerance_option(CLI::App* cmd, double& tolerance, const std::string& more) {
@@ -138,8 +141,7 @@ void add_contact_solve_tolerance_option(CLI::App* cmd, double& tolerance, const 
                   "> 0 solves the whole linear system by conjugate gradients until the "
                   "residual is this fraction of its right-hand side (docs/model.md §5.2)" +
                       more)
-      ->check(finite_range(knit::param_range("contact_solve_tolerance").min,
-                           knit::param_range("contact_solve_tolerance").max));
+      ->check(param_check("contact_solve_tolerance"));
 }
 
 void add_contact_reuse_option(CLI::App* cmd, double& reuse) {
@@ -149,8 +151,7 @@ void add_contact_reuse_option(CLI::App* cmd, double& reuse) {
                   "every control point stays within this many yarn radii of where it was "
                   "made; 0 (the default) evaluates contact every step. 0.05 cuts a 42×32 "
                   "FIRE relaxation's step by a third to a half (docs/model.md §5.2)")
-      ->check(finite_range(knit::param_range("contact_reuse").min,
-                           knit::param_range("contact_reuse").max));
+      ->check(param_check("contact_reuse"));
 }
 
 void add_export_option(CLI::App* cmd, std::string& format) {

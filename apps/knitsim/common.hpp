@@ -28,6 +28,8 @@ const std::vector<std::string>& command_args();
 /// A CLI11 check: a finite number in [lo, hi] (NaN and infinities refused; the message
 /// names the range without printing 300 digits).
 CLI::Validator finite_range(double lo, double hi);
+/// finite_range over a parameter's working range in knit::param_ranges() (by its name).
+CLI::Validator param_check(const std::string& name);
 /// A CLI11 check: a finite number > 0 and at most `hi`.
 CLI::Validator finite_positive(double hi = 1e300);
 

@@ -55,7 +55,9 @@ void YarnFrictionFilter::begin_step(const StepData& start, const Eigen::VectorXd
 
 void YarnFrictionFilter::apply(const Model& model, const Eigen::VectorXd& q, Eigen::VectorXd& v,
                                double /*time*/, double h) {
-  m_kept_before = m_kept;  // the warm start, for a step thrown away (reject_step)
+  // the warm start moves to m_kept_before (kept for a step thrown away, reject_step);
+  // m_kept is written anew
+  m_kept_before.swap(m_kept);
   m_can_reject = true;
   m_h = h;
   m_record = FrictionRecord{};
@@ -94,11 +96,11 @@ void YarnFrictionFilter::apply(const Model& model, const Eigen::VectorXd& q, Eig
   m_dv.setZero(v.size());
   // warm start: each pair that was in contact in the last step starts from its impulse
   // there, in the new tangent plane and cone (both lists are sorted by segment pair)
-  auto kept = m_kept.begin();
+  auto kept = m_kept_before.begin();
   for (Row& row : m_rows) {
     const auto key = std::pair{row.seg_i, row.seg_j};
-    while (kept != m_kept.end() && std::pair{kept->seg_i, kept->seg_j} < key) ++kept;
-    if (kept == m_kept.end() || std::pair{kept->seg_i, kept->seg_j} != key) continue;
+    while (kept != m_kept_before.end() && std::pair{kept->seg_i, kept->seg_j} < key) ++kept;
+    if (kept == m_kept_before.end() || std::pair{kept->seg_i, kept->seg_j} != key) continue;
     Eigen::Vector3d lambda = kept->lambda - kept->lambda.dot(row.normal) * row.normal;
     const double norm = lambda.norm();
     if (norm > row.bound) lambda *= row.bound / norm;
