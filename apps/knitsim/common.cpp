@@ -128,9 +128,9 @@ void add_max_step_halvings_option(CLI::App* cmd, int& halvings) {
   cmd->add_option("--max-step-halvings", halvings,
                   "a step that fails (the yarn torn apart in it, a value not finite, the "
                   "projection not converged) is taken again in two halves, up to this many "
-                  "times (h/2ⁿ), and the halved step kept for 20 steps before h is tried "
-                  "again; the summary's step_halvings counts them (default 0: the run stops "
-                  "at the first failed step)")
+                  "times (h/2ⁿ); a simulation keeps the halved step to its end, a FIRE "
+                  "relaxation tries h again after 20 good steps; the summary's step_halvings "
+                  "counts them (default 0: the run stops at the first failed step)")
       ->check(param_check("max_step_halvings"));
 }
 
