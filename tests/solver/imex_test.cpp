@@ -75,6 +75,48 @@ TEST(Imex, BandSolverMatchesDenseCholesky) {
   EXPECT_FALSE(solver.factor(m, blocks, h2));
 }
 
+// The glues' W = L⁻¹ Jᵀ solved column by column where each column lives: from its first
+// entry until it has died away, the rest exactly 0. It matches the whole forward solve
+// to far below rounding, and a column that starts near the yarn's end, or dies away, is
+// solved over a short stretch only.
+TEST(Imex, GlueColumnsAreSolvedWhereTheyLive) {
+  ModelBuilder b;
+  b.add_yarn(line(400, 60.0));
+  const Model m = b.build(Params{});
+  std::vector<Matrix12d> blocks(m.num_seg());
+  for (int i = 0; i < m.num_seg(); ++i) {
+    const Eigen::Matrix<double, 12, 6> g = Eigen::Matrix<double, 12, 6>::Random();
+    blocks[i] = 1e3 * g * g.transpose();
+  }
+  StiffSolver solver;
+  ASSERT_TRUE(solver.factor(m, blocks, 1e-6));
+  const int n = m.num_dof();
+  StiffSolver::RowMajorMatrix x = StiffSolver::RowMajorMatrix::Zero(n, 3);
+  // a glue from the yarn's start to a point further on, one near its end, one in the middle
+  x(1, 0) = 1;
+  x(400, 0) = -1;
+  x(n - 5, 1) = 0.5;
+  x(600, 2) = 2;
+  x(603, 2) = -2;
+  StiffSolver::RowMajorMatrix whole = x;
+  solver.forward(whole);
+  const std::vector<int> first = {1, n - 5, 600}, last = {400, n - 5, 603};
+  const std::vector<int> end = solver.forward_columns(x, first, last, 1e-20);
+  ASSERT_EQ(end.size(), 3u);
+  for (int k = 0; k < 3; ++k) {
+    const double peak = whole.col(k).cwiseAbs().maxCoeff();
+    EXPECT_LE((x.col(k) - whole.col(k)).cwiseAbs().maxCoeff(), 1e-18 * peak) << "column " << k;
+    for (int j = end[k]; j < n; ++j) ASSERT_EQ(x(j, k), 0.0) << "column " << k << " row " << j;
+    for (int j = 0; j < first[k]; ++j) ASSERT_EQ(x(j, k), 0.0) << "column " << k << " row " << j;
+  }
+  // each column dies away within about a hundred control points of its input, where the
+  // yarn goes on for hundreds more
+  EXPECT_LT(end[0], 400 + 400);
+  EXPECT_LT(end[2], 603 + 400);
+  EXPECT_GT(n, 603 + 400);
+  EXPECT_EQ(end[1], n);  // the yarn ends first
+}
+
 // A straight yarn stretched 25 % beyond its rest length (length constraints off, as in a
 // relaxation; no gravity, no damping): the length energy pulls it back. With k_len = 1e7
 // its stiffest mode along the yarn has ω ≈ √(k_len / (μ ℓ²)) · O(1), far beyond what the

@@ -590,6 +590,15 @@ void Simulator::build_solve_constraints() {
   m_glue_c.resize(offset);
 }
 
+template <class F>
+double Simulator::glue_column_dot(int r, F&& value, int from, int to) const {
+  // Σ_j W(j, r) value(j) over where column r of W is not 0 (and within [from, to))
+  const int begin = std::max(m_glue_first[r], from), end = std::min(m_glue_end[r], to);
+  double sum = 0;
+  for (int j = begin; j < end; ++j) sum += m_glue_y(j, r) * value(j);
+  return sum;
+}
+
 void Simulator::hold_glues_in_solve(const State& s, double h, Eigen::VectorXd& dv, bool kept,
                                     bool halfway) {
   const int m = static_cast<int>(m_glue_rows.size());
@@ -603,14 +612,23 @@ void Simulator::hold_glues_in_solve(const State& s, double h, Eigen::VectorXd& d
   const int n = static_cast<int>(dv.size());
   if (!kept || m_glue_y.rows() != n || m_glue_y.cols() != m) {
     m_glue_y.setZero(n, m);
-    int first = n;
+    m_glue_first.assign(m, n);
+    std::vector<int> last(m, 0);
     for (int r = 0; r < m; ++r)
       for (const auto& [dof, value] : m_glue_rows[r]) {
         m_glue_y(dof, r) = value;
-        first = std::min(first, dof);
+        m_glue_first[r] = std::min(m_glue_first[r], dof);
+        last[r] = std::max(last[r], dof);
       }
-    m_stiff.forward(m_glue_y, first);  // every column in one pass
-    m_glue_s.compute(m_glue_y.transpose() * m_glue_y);
+    // every column in one pass, each over the stretch of yarn where it has not died away
+    // (below 10⁻²⁰ of its largest value: nothing a double sum of it can see)
+    m_glue_end = m_stiff.forward_columns(m_glue_y, m_glue_first, last, 1e-20);
+    Eigen::MatrixXd s(m, m);
+    for (int a = 0; a < m; ++a)
+      for (int b = 0; b <= a; ++b)
+        s(a, b) = s(b, a) = glue_column_dot(
+            a, [&](int j) { return m_glue_y(j, b); }, m_glue_first[b], m_glue_end[b]);
+    m_glue_s.compute(s);
   }
   Eigen::VectorXd rhs(m);
   int offset = 0;
@@ -618,7 +636,8 @@ void Simulator::hold_glues_in_solve(const State& s, double h, Eigen::VectorXd& d
     group->evaluate(m_model, s.q, s.time + h, m_glue_c.data() + offset, nullptr);
     offset += group->rows();
   }
-  if (halfway) rhs.noalias() = m_glue_y.transpose() * dv;  // J Δv₀ on the free coordinates
+  if (halfway)  // J Δv₀ on the free coordinates
+    for (int r = 0; r < m; ++r) rhs[r] = glue_column_dot(r, [&](int j) { return dv[j]; });
   for (int r = 0; r < m; ++r) {
     // J v⁺ over every coordinate of the row: a fixed one's v⁺ is known (the solve gave
     // it its value, which y holds too), only the free ones' are corrected by A⁻¹ Jᵀ μ
@@ -631,13 +650,19 @@ void Simulator::hold_glues_in_solve(const State& s, double h, Eigen::VectorXd& d
     rhs[r] = jv + m_glue_c[m_glue_row_of[r]] / h;
   }
   m_glue_mu = m_glue_s.solve(rhs);
+  // W μ, each column over its own stretch
+  auto subtract_w_mu = [&](Eigen::VectorXd& out) {
+    for (int r = 0; r < m; ++r)
+      for (int j = m_glue_first[r]; j < m_glue_end[r]; ++j) out[j] -= m_glue_y(j, r) * m_glue_mu[r];
+  };
   if (halfway) {
-    dv.noalias() -= m_glue_y * m_glue_mu;
+    subtract_w_mu(dv);
     return;
   }
-  Eigen::VectorXd column = m_glue_y * m_glue_mu;
+  Eigen::VectorXd column = Eigen::VectorXd::Zero(n);
+  subtract_w_mu(column);
   m_stiff.backward(column);
-  dv -= column;
+  dv += column;
 }
 
 void Simulator::record_solve_forces(const Eigen::VectorXd& q, double time, double h) {

@@ -12,6 +12,7 @@
 // A step that fails leaves the State untouched and reports why: non-finite values, a
 // control point moving more than a yarn radius in one step (contact could then let yarns
 // pass through each other), or a projection that does not converge.
+#include <limits>
 #include <map>
 #include <memory>
 #include <string>
@@ -180,7 +181,12 @@ class Simulator {
   std::vector<Eigen::Vector3d> m_solve_force, m_solve_torque, m_solve_about;
   void record_solve_forces(const Eigen::VectorXd& q, double time, double h);
   Eigen::VectorXd m_glue_c;
-  StiffSolver::RowMajorMatrix m_glue_y;   // L⁻¹ ∇Cᵀ, with M + h² K = L Lᵀ
+  StiffSolver::RowMajorMatrix m_glue_y;  // L⁻¹ ∇Cᵀ, with M + h² K = L Lᵀ
+  // each column's rows where it is not 0: [first, end) (StiffSolver::forward_columns)
+  std::vector<int> m_glue_first, m_glue_end;
+  template <class F>
+  double glue_column_dot(int r, F&& value, int from = 0,
+                         int to = std::numeric_limits<int>::max()) const;
   Eigen::LDLT<Eigen::MatrixXd> m_glue_s;  // S = J A⁻¹ Jᵀ
   // the kept matrix (contact reuse, imex_step): whether the factor, m_blocks and the glues'
   // W and S may be reused, whether it has stiffness blocks, its h and where it was formed

@@ -141,6 +141,65 @@ void StiffSolver::forward(RowMajorMatrix& X, int first) const {
   }
 }
 
+std::vector<int> StiffSolver::forward_columns(RowMajorMatrix& X, const std::vector<int>& first,
+                                              const std::vector<int>& last,
+                                              double negligible) const {
+  const double* a = m_band.data();
+  const int m_cols = static_cast<int>(X.cols());
+  double* x = X.data();
+  std::vector<int> end(m_cols, m_n);
+  // columns in the order they start; `active` those started and not yet died away
+  std::vector<int> order(m_cols);
+  for (int k = 0; k < m_cols; ++k) order[k] = k;
+  std::sort(order.begin(), order.end(), [&](int p, int q) { return first[p] < first[q]; });
+  std::vector<double> peak(m_cols, 0.0);
+  std::vector<int> last_big(m_cols, 0);
+  std::vector<int> active;
+  active.reserve(m_cols);
+  size_t next = 0;
+  for (int j = 0; j < m_n; ++j) {
+    while (next < order.size() && first[order[next]] <= j) {
+      const int k = order[next++];
+      active.push_back(k);
+      last_big[k] = j;
+    }
+    if (active.empty()) {
+      if (next == order.size()) break;
+      j = std::max(j, first[order[next]]) - 1;
+      continue;
+    }
+    const double* col = a + static_cast<size_t>(j) * W;
+    double* xj = x + static_cast<size_t>(j) * m_cols;
+    const double inv = m_inv_pivot[j];
+    const int m = std::min(BAND, m_n - 1 - j);
+    for (int k : active) {
+      xj[k] *= inv;
+      const double value = std::abs(xj[k]);
+      peak[k] = std::max(peak[k], value);
+      if (value > negligible * peak[k]) last_big[k] = j;
+    }
+    for (int r = 1; r <= m; ++r) {
+      double* xr = xj + static_cast<size_t>(r) * m_cols;
+      const double l = col[r];
+      for (int k : active) xr[k] -= l * xj[k];
+    }
+    // a column whose last BAND + 1 rows are negligible, its input all behind it, has died
+    // away: what those rows passed on to the next BAND rows is dropped with them
+    for (size_t t = 0; t < active.size();) {
+      const int k = active[t];
+      if (j >= last[k] && j - last_big[k] >= BAND) {
+        end[k] = j + 1;
+        for (int r = 1; r <= m; ++r) xj[static_cast<size_t>(r) * m_cols + k] = 0;
+        active[t] = active.back();
+        active.pop_back();
+      } else {
+        ++t;
+      }
+    }
+  }
+  return end;
+}
+
 void StiffSolver::backward(Eigen::VectorXd& x) const {
   const double* a = m_band.data();
   const double* inv = m_inv_pivot.data();
