@@ -589,9 +589,10 @@ PYBIND11_MODULE(knitsim, m) {
       [](const std::string& kstate, const std::string& direction, double to, double speed,
          int cycles, int clamp_stitches, double output_strain, double hold, double hold_time,
          bool hold_damped, const py::object& params, const std::string& out, bool overwrite,
-         bool render, bool progress, const std::string& resume) {
+         bool render, bool progress, const std::string& resume, double max_force) {
         StretchOptions o;
         o.resume = resume;
+        o.max_force = max_force;
         o.params = params_over(o.params, params, "stretch");
         o.hold_strain = hold;
         o.hold_time = hold_time;
@@ -637,7 +638,7 @@ PYBIND11_MODULE(knitsim, m) {
       "kstate"_a, "direction"_a = "course", "to"_a = 1.0, "speed"_a = 5.0, "cycles"_a = 0,
       "clamp_stitches"_a = 2, "output_strain"_a = 0.01, "hold"_a = 0.0, "hold_time"_a = 0.3,
       "hold_damped"_a = false, "params"_a = py::none(), "out"_a = "", "overwrite"_a = false,
-      "render"_a = false, "progress"_a = false, "resume"_a = "",
+      "render"_a = false, "progress"_a = false, "resume"_a = "", "max_force"_a = 0.0,
       "Stretch test of a relaxed knit (.kstate) along the course, wale or bias, as `knitsim "
       "stretch --from`: returns the report with `curve` (strain, clamp forces in dyn, width "
       "in cm, … as numpy arrays), the initial clamp separation (cm) and the speed as run. "
@@ -647,5 +648,8 @@ PYBIND11_MODULE(knitsim, m) {
       "and `force_residual` (cm/s²) how far from rest each is. `params`: a dict of scene "
       "parameters over the simulation's (e.g. {\"yarn_friction\": 0.3}). `resume`: go on "
       "with the stopped run in `out` (same arguments) from its final.kstate, a frame, or `out` "
-      "itself (its latest state with a sample in stretch.csv).");
+      "itself (its latest state with a sample in stretch.csv). `max_force` > 0 (dyn): end the "
+      "pull at the first sample where a clamp's force exceeds it (a load limit; the summary's "
+      "stretch.stopped "
+      "says where).");
 }

@@ -67,6 +67,11 @@ void register_stretch(CLI::App& app) {
   cmd->add_flag("--hold-damped", o->stretch.hold_damped,
                 "with --hold: hold with the simulation's damping instead of FIRE (a "
                 "stress-relaxation test)");
+  cmd->add_option("--max-force", o->stretch.max_force,
+                  "end the pull at the first sample (every 0.01 strain) where either clamp's "
+                  "force along it exceeds this (dyn), as a tensile tester's load limit; the "
+                  "summary's stretch.stopped says where (default 0: no limit)")
+      ->check(finite_range(0, 1e12));
   cmd->add_option("--time-step", o->time_step, "time step of the yarn model (s)")
       ->check(param_check("time_step"));
   add_integrator_option(cmd, o->integrator);
@@ -162,16 +167,17 @@ void register_stretch(CLI::App& app) {
     if (cmd->count("--integrator"))
       o->stretch.params.solver.integrator = knit::parse_integrator(o->integrator);
     o->stretch.params.solver.implicit_bending = o->implicit_bending;
-    if (o->use_sheet &&
-        (cmd->count("--hold") + cmd->count("--hold-time") + cmd->count("--hold-damped") +
-             cmd->count("--time-step") + cmd->count("--integrator") +
-             cmd->count("--implicit-bending") + cmd->count("--yarn-friction") +
-             cmd->count("--end-mass-floor") + cmd->count("--max-step-halvings") >
-         0))
+    if (o->use_sheet && (cmd->count("--hold") + cmd->count("--hold-time") +
+                             cmd->count("--hold-damped") + cmd->count("--time-step") +
+                             cmd->count("--integrator") + cmd->count("--implicit-bending") +
+                             cmd->count("--yarn-friction") + cmd->count("--end-mass-floor") +
+                             cmd->count("--max-step-halvings") + cmd->count("--max-force") >
+                         0))
       throw std::invalid_argument(
           "stretch --sheet: the sheet is pulled through equilibria already; --hold, "
           "--hold-time, --hold-damped, --time-step, --integrator, --implicit-bending, "
-          "--yarn-friction, --end-mass-floor and --max-step-halvings are for the yarn model");
+          "--yarn-friction, --end-mass-floor, --max-step-halvings and --max-force are for "
+          "the yarn model");
     if ((cmd->count("--hold-time") || o->stretch.hold_damped) && !cmd->count("--hold"))
       throw std::invalid_argument("stretch: --hold-time and --hold-damped need --hold");
     o->stretch.out_dir = o->out;
@@ -242,7 +248,12 @@ void register_stretch(CLI::App& app) {
     // a pull that stopped (unstable) says where
     double reached = 0;
     for (const auto& s : result.curve) reached = std::max(reached, s.strain);
-    if (result.report.status == knit::StepStatus::OK || result.curve.empty())
+    if (m.contains("stopped"))
+      std::cout << "stopped at the load limit: " << m["stopped"]["force_moving_dyn"].get<double>()
+                << " dyn on the moving clamp (limit " << o->stretch.max_force << ") at strain "
+                << m["stopped"]["strain"].get<double>() << " of " << o->stretch.to_strain
+                << ", pulled " << o->direction;
+    else if (result.report.status == knit::StepStatus::OK || result.curve.empty())
       std::cout << "stretched " << o->direction << " to strain " << o->stretch.to_strain;
     else
       std::cout << "stopped at strain " << reached << " of " << o->stretch.to_strain << " ("

@@ -219,6 +219,49 @@ TEST(Stretch, HalvingDoesNotRescueAPullLongUnstable) {
 }
 
 // --from a relative path is read from the working directory (not from beside itself)
+// A load limit ends the pull at the first sample where a clamp's force exceeds it: the
+// curve up to there is the unlimited pull's, every earlier sample is within the limit, and
+// the summary says where it stopped.
+TEST(Stretch, ALoadLimitEndsThePullWhereTheForceFirstExceedsIt) {
+  StretchOptions o;
+  o.to_strain = 0.2;
+  o.progress = false;
+  const StretchResult whole = stretch_knit(relaxed_sample(), o);
+  ASSERT_EQ(whole.report.summary["status"], "ok");
+  double peak = 0;
+  for (const StretchSample& s : whole.curve) peak = std::max(peak, s.force_moving);
+  ASSERT_GT(peak, 0.0);
+  o.max_force = 0.9 * peak;  // reached partway (the drag makes half the force at once)
+  o.out_dir = (fs::path(::testing::TempDir()) / "stretch_limit").string();
+  o.overwrite = true;
+  o.render = false;
+  const StretchResult r = stretch_knit(relaxed_sample(), o);
+  ASSERT_EQ(r.report.summary["status"], "ok") << r.report.summary.dump(2);
+  EXPECT_TRUE(r.report.summary["stopped_early"].get<bool>());
+  const nlohmann::json& stop = r.report.summary["stretch"]["stopped"];
+  ASSERT_TRUE(stop.is_object()) << r.report.summary["stretch"].dump(2);
+  EXPECT_EQ(stop["reason"], "max_force");
+  EXPECT_GT(std::max(stop["force_moving_dyn"].get<double>(), stop["force_fixed_dyn"].get<double>()),
+            o.max_force);
+  const double at = stop["strain"].get<double>();
+  EXPECT_GT(at, 0.0);
+  EXPECT_LT(at, 0.2);
+  ASSERT_GE(r.curve.size(), 3u);
+  EXPECT_NEAR(r.curve.back().strain, at, 1e-12);  // the stopping state is the last sample
+  for (size_t k = 0; k + 1 < r.curve.size(); ++k) {
+    EXPECT_LE(std::max(r.curve[k].force_moving, r.curve[k].force_fixed), o.max_force) << k;
+    // the same pull as without the limit, sample for sample
+    ASSERT_LT(k, whole.curve.size());
+    EXPECT_NEAR(r.curve[k].force_moving, whole.curve[k].force_moving,
+                1e-9 * std::abs(whole.curve[k].force_moving) + 1e-9)
+        << k;
+  }
+  const CsvTable t = read_csv(o.out_dir + "/stretch.csv");
+  EXPECT_EQ(t.rows.size(), r.curve.size());
+  std::ifstream in(o.out_dir + "/summary.json");
+  EXPECT_EQ(nlohmann::json::parse(in)["stretch"]["stopped"]["reason"], "max_force");
+}
+
 TEST(Stretch, ARelativePathIsReadFromTheWorkingDirectory) {
   const fs::path sample = relaxed_sample(), cwd = fs::current_path();
   fs::current_path(sample.parent_path());
@@ -414,6 +457,9 @@ TEST(Stretch, BadOptionsAreRefusedBeforeAnythingIsWritten) {
   still.hold_strain = 0.1;
   still.hold_time = 0;
   EXPECT_NE(message(still).find("--hold-time"), std::string::npos) << message(still);
+  StretchOptions limit;
+  limit.max_force = -1;
+  EXPECT_NE(message(limit).find("--max-force"), std::string::npos) << message(limit);
   EXPECT_FALSE(fs::exists(out)) << "a refused stretch wrote its directory";
 }
 

@@ -340,6 +340,9 @@ void validate_stretch_options(const StretchOptions& o) {
   if (o.hold_strain > 0 && (!(o.hold_time > 0) || !std::isfinite(o.hold_time) || o.hold_time > 100))
     throw std::invalid_argument("--hold-time: expected (0, 100] s, got " +
                                 short_number(o.hold_time));
+  if (!std::isfinite(o.max_force) || o.max_force < 0 || o.max_force > 1e12)
+    throw std::invalid_argument("--max-force: expected [0, 1e12] dyn (0: no limit), got " +
+                                short_number(o.max_force));
   validate_params(o.params);
 }
 
@@ -665,6 +668,22 @@ StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions&
   so.resume_command = o.resume_command;
   RunOptions run = scene_run_options(scene, so);
   run.on_output = sample;
+  // the load limit, on the samples' forces (a step's own record also carries the jerk of
+  // the clamp starting to move: 7× the force of the pull at its first step on a 5×6)
+  nlohmann::json stopped;
+  if (o.max_force > 0)
+    run.stop_when = [&](const StepData&, const State&) {
+      if (result.curve.empty()) return false;
+      const StretchSample& s = result.curve.back();
+      if (std::max(s.force_fixed, s.force_moving) <= o.max_force) return false;
+      stopped = {{"reason", "max_force"},
+                 {"max_force_dyn", o.max_force},
+                 {"time_s", s.time},
+                 {"strain", s.strain},
+                 {"force_fixed_dyn", s.force_fixed},
+                 {"force_moving_dyn", s.force_moving}};
+      return true;
+    };
   if (held) run.before_output = [](Simulator& s, const State& st) { s.force_residual(st); };
   run.extra = {{"model", "yarn"},
                {"direction", stretch_direction_name(o.direction)},
@@ -673,6 +692,7 @@ StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions&
                {"speed_cm_s", result.speed},
                {"protocol", held ? "hold" : "continuous"},
                {"clamp_stitches", o.clamp_stitches},
+               {"max_force_dyn", o.max_force > 0 ? nlohmann::json(o.max_force) : nlohmann::json()},
                {"from", kstate_path},
                {"axis", {axis[0], axis[1], axis[2]}}};
   if (held) {
@@ -693,6 +713,7 @@ StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions&
   run.on_finish = [&](Simulator&, const State&, nlohmann::json& summary) {
     summary["stretch"] =
         stretch_measures(result.curve, o.to_strain, result.initial_separation, o.hold_strain);
+    if (!stopped.is_null()) summary["stretch"]["stopped"] = stopped;
     if (held) {
       // how near to rest the holds came: the force residual at their ends
       double worst = 0, sum = 0;

@@ -47,6 +47,12 @@ struct StretchOptions {
   /// continuous pull at `speed`, sampled every `output_strain`.
   double hold_strain = 0;
   double hold_time = 0.3;  ///< s of each hold (with hold_strain)
+  /// > 0: a load limit, as on a tensile tester: the pull ends (status ok) at the first
+  /// sample (every output_strain, or a hold's end) where either clamp's force along the pull
+  /// exceeds this (dyn). The summary's stretch.stopped says at what strain and force. 0: none. A
+  /// knit pulled until its yarns jam (along the bias from corner clamps) otherwise goes on until
+  /// the contact penalty gives way and a step fails.
+  double max_force = 0;
   /// With hold_strain: hold with the simulation's own damping (the non-rigid damping
   /// filter and global damping) instead of FIRE — a stress-relaxation test: the force
   /// decays through each hold as the damped knit creeps, sampled at its end.
