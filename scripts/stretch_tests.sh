@@ -11,7 +11,7 @@
 # Usage: scripts/stretch_tests.sh [--rows R] [--cols C] [--speed V] [--to E] [--wale-to E]
 #                                 [--threads N] [--friction MU] [--directions LIST] [--bind-off]
 #                                 [--bias-bound] [--cast-on] [--sheet-directions LIST]
-#                                 [--patterns LIST]
+#                                 [--patterns LIST] [--max-force F]
 # --to is the strain of the course and bias pulls (default 1), --wale-to the wale pull's
 # (default 0.6: a stockinette's loops jam at about 0.8 along the wale, where the
 # inextensible yarn stops the pull and the run ends unstable). A run that ends unstable
@@ -42,12 +42,16 @@
 # run side by side); the sheet and the figures wait until every yarn pull has ended.
 # --directions LIST: the yarn pulls to run now, a comma-separated subset of course,wale,bias
 # (default all three); the sheet and the figures wait until every yarn pull has ended.
+# --max-force F: every yarn pull ends (ok) at its first sample with a clamp over F dyn (a
+# load limit, `stretch --max-force`), instead of running into the jam until a step fails;
+# runs that already ended are kept as they are.
 # KNITSIM=PATH runs another knitsim binary (e.g. a copy, so that a rebuild of build/ does
 # not change a long run halfway).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 rows=12 cols=12 speed=1 to=1.0 wale_to=0.6 threads=0 friction= directions=course,wale,bias bind_off=
 bias_bound= sheet_directions=course,wale,bias cast_on= patterns=stockinette,garter,rib2x2
+max_force=
 while [ $# -gt 0 ]; do
   case $1 in
     --rows) rows=$2; shift 2 ;;
@@ -63,6 +67,7 @@ while [ $# -gt 0 ]; do
     --cast-on) cast_on=--cast-on; shift ;;
     --patterns) patterns=$2; shift 2 ;;
     --sheet-directions) sheet_directions=$2; shift 2 ;;
+    --max-force) max_force=$2; shift 2 ;;
     *) echo "stretch_tests: unknown option '$1'" >&2; exit 2 ;;
   esac
 done
@@ -106,6 +111,7 @@ if [ -n "$friction" ]; then
   root=$relaxed/friction_$friction
   yarn=(--yarn-friction "$friction" --alpha-small 0 --alpha-large 0 --end-mass-floor 0.5)
 fi
+[ -n "$max_force" ] && yarn+=(--max-force "$max_force")
 bound=out/stretch/${rows}x${cols}_bound${cast_on:+_cast}
 bound_root=$bound${friction:+/friction_$friction}
 mkdir -p "$root"

@@ -265,6 +265,19 @@ def test_stretch_takes_parameters_such_as_yarn_friction(saved_knit):
         knitsim.stretch(saved_knit, to=0.02, params={"end_mass_floor": 2})
 
 
+def test_stretch_stops_at_a_load_limit(saved_knit):
+    whole = knitsim.stretch(saved_knit, direction="course", to=0.05)
+    limit = 0.95 * max(whole["curve"]["force_moving"])
+    r = knitsim.stretch(saved_knit, direction="course", to=0.05, max_force=limit)
+    assert r["status"] == "ok"
+    stop = r["summary"]["stretch"]["stopped"]
+    assert stop["reason"] == "max_force" and stop["strain"] < 0.05
+    assert max(stop["force_moving_dyn"], stop["force_fixed_dyn"]) > limit
+    assert all(r["curve"]["force_moving"][:-1] <= limit)
+    with pytest.raises(ValueError, match="max-force"):
+        knitsim.stretch(saved_knit, to=0.02, max_force=-1)
+
+
 def test_errors_are_the_librarys_messages(tmp_path):
     with pytest.raises(ValueError, match="not a built-in pattern"):
         knitsim.relax("no_such_pattern", rows=4, cols=4)

@@ -104,6 +104,14 @@ TEST(Stretch, TheCurvesMeasuresAreTheKnownOnes) {
     work += 0.5 * (curve[i].force_moving + curve[i - 1].force_moving) * 0.1;
   EXPECT_NEAR(m["work_erg"].get<double>(), work, 1e-9 * work);
   EXPECT_NEAR(m["width_change"].get<double>(), 4.0 / 5 - 1, 1e-12);
+  // a pull that stopped at 0.8 (a load limit, a failed step): its end is there
+  curve.resize(81);
+  const nlohmann::json stopped = stretch_measures(curve, 1.0, 10.0);
+  // the slope over [0.7, 0.8] lies between the curve's slopes at its two ends
+  ASSERT_TRUE(stopped["stiffness_end"].is_number()) << stopped.dump();
+  EXPECT_GT(stopped["stiffness_end"].get<double>(), 100 + 4000 * 0.1);
+  EXPECT_LT(stopped["stiffness_end"].get<double>(), 100 + 4000 * 0.2);
+  EXPECT_NEAR(stopped["width_change"].get<double>(), 4.2 / 5 - 1, 1e-12);
 }
 
 TEST(Stretch, WaleAndBiasPullAlongTheirAxes) {

@@ -128,7 +128,10 @@ nlohmann::json stretch_measures(const std::vector<StretchSample>& all, double to
   // not stiffness; a held curve's first sample ends a hold like the others
   const double k0 = slope(curve, n, held ? -1e-12 : 1e-12, window, held);
   m["stiffness_small_strain"] = number_or_null(k0);
-  m["stiffness_end"] = number_or_null(slope(curve, n, to - window, to, held));
+  // the end the pull reached: its target strain, or where it stopped (a load limit, a
+  // failed step)
+  const double end = n > 0 ? std::min(to, curve[n - 1].strain) : to;
+  m["stiffness_end"] = number_or_null(slope(curve, n, end - window, end, held));
   double stiffening = std::numeric_limits<double>::quiet_NaN();
   if (std::isfinite(k0) && k0 > 0)
     for (double e = window; e + window <= to * (1 + 1e-9); e += 0.5 * window)

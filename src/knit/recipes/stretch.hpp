@@ -162,13 +162,13 @@ StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions&
 
 /// Measures of a curve, for the summary: initial_separation_cm, stiffness_small_strain
 /// (least-squares slope of the moving clamp's force against strain over the first tenth
-/// of the pull, the rest sample at strain 0 left out, dyn per unit strain), stiffness_end (over its
-/// last tenth), stiffening_strain (the first strain where the slope over a window of a tenth of the
-/// pull reaches three times the small-strain slope; null if never), work_erg (∫ F dx of the moving
-/// clamp over the whole run), max_force_dyn, width_change (width at the end of the pull over the
-/// initial width, − 1).
-/// With hold_strain > 0 (the held protocol) only the samples at the holds' ends count, the
-/// rest sample at strain 0 among them (it has no drag), and each window spans at least two
+/// of the pull, the rest sample at strain 0 left out, dyn per unit strain), stiffness_end (over the
+/// last tenth of --to of the pull it made: up to `to_strain`, or up to where it stopped),
+/// stiffening_strain (the first strain where the slope over a window of a tenth of the pull reaches
+/// three times the small-strain slope; null if never), work_erg (∫ F dx of the moving clamp over
+/// the whole run), max_force_dyn, width_change (width at the end of the pull over the initial
+/// width, − 1). With hold_strain > 0 (the held protocol) only the samples at the holds' ends count,
+/// the rest sample at strain 0 among them (it has no drag), and each window spans at least two
 /// holds.
 nlohmann::json stretch_measures(const std::vector<StretchSample>& curve, double to_strain,
                                 double initial_separation, double hold_strain = 0);
