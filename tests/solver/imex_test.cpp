@@ -19,6 +19,16 @@ namespace {
 
 using test::line;
 
+// a random positive-semidefinite 12×12 block per segment, of rank 6, entries of about `scale`
+std::vector<Matrix12d> random_semidefinite_blocks(const Model& m, double scale) {
+  std::vector<Matrix12d> blocks(m.num_seg());
+  for (int i = 0; i < m.num_seg(); ++i) {
+    const Eigen::Matrix<double, 12, 6> g = Eigen::Matrix<double, 12, 6>::Random();
+    blocks[i] = scale * g * g.transpose();
+  }
+  return blocks;
+}
+
 // The band Cholesky of M + h² K against Eigen's dense LLT, on two yarns (which must not
 // couple) with random positive-semidefinite segment blocks.
 TEST(Imex, BandSolverMatchesDenseCholesky) {
@@ -26,11 +36,7 @@ TEST(Imex, BandSolverMatchesDenseCholesky) {
   b.add_yarn(line(7, 3.0));
   b.add_yarn(line(5, 2.0));
   const Model m = b.build(Params{});
-  std::vector<Matrix12d> blocks(m.num_seg());
-  for (int i = 0; i < m.num_seg(); ++i) {
-    const Eigen::Matrix<double, 12, 6> g = Eigen::Matrix<double, 12, 6>::Random();
-    blocks[i] = 50.0 * g * g.transpose();
-  }
+  std::vector<Matrix12d> blocks = random_semidefinite_blocks(m, 50.0);
   const double h2 = 1e-6;
   Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(m.num_dof(), m.num_dof());
   for (int d = 0; d < m.num_dof(); ++d) dense(d, d) = m.mass[d / 3];
@@ -83,11 +89,7 @@ TEST(Imex, GlueColumnsAreSolvedWhereTheyLive) {
   ModelBuilder b;
   b.add_yarn(line(400, 60.0));
   const Model m = b.build(Params{});
-  std::vector<Matrix12d> blocks(m.num_seg());
-  for (int i = 0; i < m.num_seg(); ++i) {
-    const Eigen::Matrix<double, 12, 6> g = Eigen::Matrix<double, 12, 6>::Random();
-    blocks[i] = 1e3 * g * g.transpose();
-  }
+  const std::vector<Matrix12d> blocks = random_semidefinite_blocks(m, 1e3);
   StiffSolver solver;
   ASSERT_TRUE(solver.factor(m, blocks, 1e-6));
   const int n = m.num_dof();
