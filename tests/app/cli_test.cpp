@@ -613,6 +613,13 @@ TEST(Cli, SheetStretchRefusesBadRequestsAndRuns) {
   r = run("stretch --from " + knit + " --sheet --yarn-friction 0.3 --out " + dir);
   EXPECT_EQ(r.code, 1);
   EXPECT_NE(r.output.find("--yarn-friction"), std::string::npos) << r.output;
+  // the load limit is the yarn pull's, and not below 0
+  r = run("stretch --from " + knit + " --sheet --max-force 1e4 --out " + dir);
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.output.find("--max-force"), std::string::npos) << r.output;
+  r = run("stretch --from " + knit + " --max-force -1 --out " + dir);
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.output.find("--max-force"), std::string::npos) << r.output;
   r = run("stretch --from " + knit + " --hold-time 0.2 --out " + dir);
   EXPECT_EQ(r.code, 1);
   EXPECT_NE(r.output.find("need --hold"), std::string::npos) << r.output;
