@@ -606,23 +606,19 @@ TEST(Cli, SheetStretchRefusesBadRequestsAndRuns) {
   EXPECT_EQ(r.code, 1);
   EXPECT_NE(r.output.find("k_shear"), std::string::npos) << r.output;
   EXPECT_FALSE(std::filesystem::exists(dir));
-  // the held protocol is the yarn model's, and its options go with --hold
-  r = run("stretch --from " + knit + " --sheet --hold 0.05 --out " + dir);
-  EXPECT_EQ(r.code, 1);
-  EXPECT_NE(r.output.find("--hold"), std::string::npos) << r.output;
-  r = run("stretch --from " + knit + " --sheet --yarn-friction 0.3 --out " + dir);
-  EXPECT_EQ(r.code, 1);
-  EXPECT_NE(r.output.find("--yarn-friction"), std::string::npos) << r.output;
-  // the load limit is the yarn pull's, and not below 0
-  r = run("stretch --from " + knit + " --sheet --max-force 1e4 --out " + dir);
-  EXPECT_EQ(r.code, 1);
-  EXPECT_NE(r.output.find("--max-force"), std::string::npos) << r.output;
-  r = run("stretch --from " + knit + " --max-force -1 --out " + dir);
-  EXPECT_NE(r.code, 0);
-  EXPECT_NE(r.output.find("--max-force"), std::string::npos) << r.output;
-  r = run("stretch --from " + knit + " --hold-time 0.2 --out " + dir);
-  EXPECT_EQ(r.code, 1);
-  EXPECT_NE(r.output.find("need --hold"), std::string::npos) << r.output;
+  // the held protocol, yarn friction and the load limit are the yarn model's, --hold's
+  // options go with it, and the load limit is not below 0: each refused by name
+  const std::vector<std::pair<std::string, std::string>> refused = {
+      {"--sheet --hold 0.05", "--hold"},
+      {"--sheet --yarn-friction 0.3", "--yarn-friction"},
+      {"--sheet --max-force 1e4", "--max-force"},
+      {"--max-force -1", "--max-force"},
+      {"--hold-time 0.2", "need --hold"}};
+  for (const auto& [options, named] : refused) {
+    r = run("stretch --from " + knit + " " + options + " --out " + dir);
+    EXPECT_NE(r.code, 0) << options;
+    EXPECT_NE(r.output.find(named), std::string::npos) << options << ": " << r.output;
+  }
   EXPECT_FALSE(std::filesystem::exists(dir));
   r = run("stretch --from " + knit + " --sheet --to 0.1 --no-render -q --out " + dir);
   ASSERT_EQ(r.code, 0) << r.output;
