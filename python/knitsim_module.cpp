@@ -650,6 +650,5 @@ PYBIND11_MODULE(knitsim, m) {
       "with the stopped run in `out` (same arguments) from its final.kstate, a frame, or `out` "
       "itself (its latest state with a sample in stretch.csv). `max_force` > 0 (dyn): end the "
       "pull at the first sample where a clamp's force exceeds it (a load limit; the summary's "
-      "stretch.stopped "
-      "says where).");
+      "stretch.stopped says where).");
 }

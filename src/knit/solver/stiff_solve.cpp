@@ -123,24 +123,6 @@ void StiffSolver::forward(Eigen::VectorXd& x, int first) const {
   }
 }
 
-void StiffSolver::forward(RowMajorMatrix& X, int first) const {
-  const double* a = m_band.data();
-  const int m_cols = static_cast<int>(X.cols());
-  double* x = X.data();
-  for (int j = std::max(0, first); j < m_n; ++j) {
-    const double* col = a + static_cast<size_t>(j) * W;
-    double* xj = x + static_cast<size_t>(j) * m_cols;
-    const double inv = m_inv_pivot[j];
-    for (int k = 0; k < m_cols; ++k) xj[k] *= inv;
-    const int m = std::min(BAND, m_n - 1 - j);
-    for (int r = 1; r <= m; ++r) {
-      double* xr = xj + static_cast<size_t>(r) * m_cols;
-      const double l = col[r];
-      for (int k = 0; k < m_cols; ++k) xr[k] -= l * xj[k];
-    }
-  }
-}
-
 std::vector<int> StiffSolver::forward_columns(RowMajorMatrix& X, const std::vector<int>& first,
                                               const std::vector<int>& last,
                                               double negligible) const {

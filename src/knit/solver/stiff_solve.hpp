@@ -49,18 +49,15 @@ class StiffSolver {
   /// solves Lᵀ x = y in place. A = L Lᵀ, so Jᵀ A⁻¹ J = Wᵀ W with W = L⁻¹ Jᵀ.
   void forward(Eigen::VectorXd& x, int first = 0) const;
   void backward(Eigen::VectorXd& x) const;
-  /// forward on every column of X at once (one pass over the factor; X row-major, its
-  /// columns zero before `first`)
   using RowMajorMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-  void forward(RowMajorMatrix& X, int first = 0) const;
-  /// forward on every column of X at once, each column k from its own first nonzero row
-  /// `first[k]` (its input zero before it and after `last[k]`), and stopped where it has
-  /// died away: once past last[k], when BAND + 1 rows in a row are all below `negligible`
-  /// times the column's largest value so far, the rest of the column is set to exactly 0.
-  /// Returns each column's end (rows ≥ end[k] are 0). A column of L⁻¹ Jᵀ decays along the
-  /// yarn from where J touches it (M + h² K is dominated by its diagonal well enough), so
-  /// a glue's column is a short stretch of the yarn around the points it ties; its
-  /// products with a vector then cost that stretch, not the whole yarn.
+  /// forward on every column of X at once (one pass over the factor; X row-major), each column k
+  /// from its own first nonzero row `first[k]` (its input zero before it and after `last[k]`), and
+  /// stopped where it has died away: once past last[k], when BAND + 1 rows in a row are all below
+  /// `negligible` times the column's largest value so far, the rest of the column is set to exactly
+  /// 0. Returns each column's end (rows ≥ end[k] are 0). A column of L⁻¹ Jᵀ decays along the yarn
+  /// from where J touches it (M + h² K is dominated by its diagonal well enough), so a glue's
+  /// column is a short stretch of the yarn around the points it ties; its products with a vector
+  /// then cost that stretch, not the whole yarn.
   std::vector<int> forward_columns(RowMajorMatrix& X, const std::vector<int>& first,
                                    const std::vector<int>& last, double negligible) const;
   /// The fixed coordinates given in factor, in order.
