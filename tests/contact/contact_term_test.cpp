@@ -575,6 +575,21 @@ TEST_P(StiffnessOperator, MatchesTheDensePairHessians) {
   term.add_stiffness_product(m, y, ky);
   EXPECT_NEAR(x.dot(ky), y.dot(kx), 1e-9 * std::abs(x.dot(kx)));
   EXPECT_GE(x.dot(kx), 0.0);
+  // evaluated again where other point pairs are in contact, the products are the new
+  // state's (the point pairs' arrays are rebuilt, not added to)
+  const long long pairs_before = term.last_stats().point_pairs_in_contact;
+  Sample moved = s;
+  moved.q += random_vector(n, 0.2 * m.params.material.radius, 14);
+  force_of(term, moved, Eigen::VectorXd::Zero(n));
+  EXPECT_NE(term.last_stats().point_pairs_in_contact, pairs_before);
+  const Eigen::VectorXd oracle_moved = dense_operator_product(moved, x);
+  Eigen::VectorXd kx_moved = Eigen::VectorXd::Zero(n), rows_moved = Eigen::VectorXd::Zero(n);
+  term.add_stiffness_product(m, x, kx_moved);
+  term.add_stiffness_product_rows(m, x, touching, rows_moved);
+  EXPECT_LT(max_abs(kx_moved - oracle_moved), 1e-9 * max_abs(oracle_moved));
+  EXPECT_LT(max_abs(rows_moved.segment(3 * cp0, window.size()) -
+                    oracle_moved.segment(3 * cp0, window.size())),
+            1e-9 * max_abs(oracle_moved));
   // off: the product is empty
   term.set_operator_stiffness(false);
   Eigen::VectorXd none = Eigen::VectorXd::Zero(n);

@@ -181,7 +181,6 @@ double ContactTerm::add_force_linearised(const Model& model, const Eigen::Vector
     force += m_lin_force;
     return m_lin_energy;
   }
-  const QuadratureTable& quad = model.contact_quad;
   const double kdt = model.params.material.k_dt;
   const double kdiff = model.params.material.k_dt - model.params.material.k_dn;
   // the stiffness product K v for the step's right-hand side, formed on the way: K v₀ came
@@ -196,13 +195,10 @@ double ContactTerm::add_force_linearised(const Model& model, const Eigen::Vector
   // −F_j⁰·u + ½ uᵀH u with F_j⁰ = kt Δ (the kernels' force on j is g Δ, g = kt)
   tbb::parallel_for(tbb::blocked_range<int>(0, rows, 16), [&](const tbb::blocked_range<int>& r) {
     for (int i = r.begin(); i < r.end(); ++i) {
-      const std::vector<StiffPair>& own = m_row_stiff[i];
-      const int ci = model.seg_cp[i];
-      const double li = model.rest_length[i];
       double energy = 0;
-      for (int t = 0; t < static_cast<int>(own.size()); ++t) {
-        const StiffPair& p = own[t];
-        const int cj = model.seg_cp[p.j];
+      for (int k = m_stiff_offset[i]; k < m_stiff_offset[i + 1]; ++k) {
+        const FlatPair& p = m_flat[k];
+        const int ci = p.ci, cj = p.cj;
         const std::array<double, 4>& ba = m_basis[p.a];
         const std::array<double, 4>& bb = m_basis[p.b];
         Eigen::Vector3d u = Eigen::Vector3d::Zero();
@@ -213,7 +209,7 @@ double ContactTerm::add_force_linearised(const Model& model, const Eigen::Vector
         const double len2 = delta.squaredNorm();
         const double kn_exact = p.kn + 2 * p.kt / len2;
         const double du = delta.dot(u);
-        Eigen::Matrix<double, 3, 2>& out = m_lin_pair_force[m_stiff_offset[i] + t];
+        Eigen::Matrix<double, 3, 2>& out = m_lin_pair_force[k];
         auto f = out.col(0);
         f = p.kt * u - (kn_exact * du) * delta;
         out.col(1).setZero();
@@ -223,9 +219,8 @@ double ContactTerm::add_force_linearised(const Model& model, const Eigen::Vector
           for (int c = 0; c < 4; ++c)
             w += bb[c] * m_lin_dv.segment<3>(3 * (cj + c)) -
                  ba[c] * m_lin_dv.segment<3>(3 * (ci + c));
-          const double c2 = -2.0 * li * model.rest_length[p.j] * quad.w[p.a] * quad.w[p.b];
           const double dw = delta.dot(w);
-          f += c2 * (kdt * w - (kdiff * dw / len2) * delta);
+          f += p.c2 * (kdt * w - (kdiff * dw / len2) * delta);
           if (fuse_kv) out.col(1) = (p.kn * dw) * delta + p.kt * w;
         }
       }
@@ -238,10 +233,7 @@ double ContactTerm::add_force_linearised(const Model& model, const Eigen::Vector
         if (s >= rows) return 0.0;
         Eigen::Matrix<double, 12, 2> both = Eigen::Matrix<double, 12, 2>::Zero();
         segment_product(
-            s,
-            [&](int, const StiffPair&, int k) -> const Eigen::Matrix<double, 3, 2>& {
-              return m_lin_pair_force[k];
-            },
+            s, [&](int k) -> const Eigen::Matrix<double, 3, 2>& { return m_lin_pair_force[k]; },
             both);
         slot = both.col(0);
         kv_slot = both.col(1);
@@ -708,7 +700,7 @@ double ContactTerm::add_force_bvh(const Model& model, const Eigen::VectorXd& q,
   // per-segment sums in a fixed order: own pairs (i, j > i), then pairs (k < i, i) in
   // ascending k
   t = Clock::now();
-  index_incoming_pairs(n);
+  index_incoming_pairs(model, n);
   const double energy = m_accumulator.run(model, [&](int s, Vector12d& slot) {
     for (const PairForce& pf : m_pairs[s]) slot += pf.force_i;
     for (int q = m_incoming_offset[s]; q < m_incoming_offset[s + 1]; ++q)
@@ -747,7 +739,7 @@ double ContactTerm::add_force_bvh(const Model& model, const Eigen::VectorXd& q,
   return energy;
 }
 
-void ContactTerm::index_incoming_pairs(int n) {
+void ContactTerm::index_incoming_pairs(const Model& model, int n) {
   // a counting sort of the pairs (k, index) by their j, visited in ascending k: each
   // segment's incoming pairs come out in ascending row
   m_incoming_offset.assign(n + 1, 0);
@@ -765,6 +757,53 @@ void ContactTerm::index_incoming_pairs(int n) {
   m_stiff_offset[0] = 0;
   for (int i = 0; i < n; ++i)
     m_stiff_offset[i + 1] = m_stiff_offset[i] + static_cast<int>(m_row_stiff[i].size());
+  // ... and copied to one array in that order, with what the products read per pair
+  const QuadratureTable& quad = model.contact_quad;
+  m_flat.resize(m_stiff_offset[n]);
+  tbb::parallel_for(tbb::blocked_range<int>(0, n, 64), [&](const tbb::blocked_range<int>& r) {
+    for (int i = r.begin(); i < r.end(); ++i) {
+      const int ci = model.seg_cp[i];
+      const double li = model.rest_length[i];
+      FlatPair* out = m_flat.data() + m_stiff_offset[i];
+      for (const StiffPair& p : m_row_stiff[i]) {
+        FlatPair& f = *out++;
+        f.ci = ci;
+        f.cj = model.seg_cp[p.j];
+        f.a = p.a;
+        f.b = p.b;
+        f.dx = p.dx;
+        f.dy = p.dy;
+        f.dz = p.dz;
+        f.kn = p.kn;
+        f.kt = p.kt;
+        f.c2 = -2.0 * li * model.rest_length[p.j] * quad.w[p.a] * quad.w[p.b];
+      }
+    }
+  });
+  // each segment's incoming point pairs: per incoming segment pair (ascending row k) its
+  // run of row k's point pairs
+  m_in_offset.assign(n + 1, 0);
+  for (int s = 0; s < n; ++s) {
+    int count = 0;
+    for (int q = m_incoming_offset[s]; q < m_incoming_offset[s + 1]; ++q) {
+      const PairForce& pf = m_pairs[m_incoming[q].k][m_incoming[q].index];
+      count += pf.stiff_end - pf.stiff_begin;
+    }
+    m_in_offset[s + 1] = m_in_offset[s] + count;
+  }
+  m_in_points.resize(m_in_offset[n]);
+  tbb::parallel_for(tbb::blocked_range<int>(0, n, 64), [&](const tbb::blocked_range<int>& r) {
+    for (int s = r.begin(); s < r.end(); ++s) {
+      IncomingPoint* out = m_in_points.data() + m_in_offset[s];
+      for (int q = m_incoming_offset[s]; q < m_incoming_offset[s + 1]; ++q) {
+        const Incoming& in = m_incoming[q];
+        const PairForce& pf = m_pairs[in.k][in.index];
+        const std::vector<StiffPair>& row = m_row_stiff[in.k];
+        for (int t = pf.stiff_begin; t < pf.stiff_end; ++t)
+          *out++ = {m_stiff_offset[in.k] + t, row[t].b};
+      }
+    }
+  });
 }
 
 void ContactTerm::set_operator_stiffness(bool on) {
@@ -778,15 +817,19 @@ void ContactTerm::set_operator_stiffness(bool on) {
     for (auto& row : m_row_si) row.clear();
     for (auto& row : m_row_sj) row.clear();
     m_stiff_offset.clear();
+    m_flat.clear();
+    m_in_points.clear();
+    m_in_offset.clear();
   }
 }
 
-Eigen::Vector3d ContactTerm::pair_product(const StiffPair& p, const double* xi,
-                                          const double* xj) const {
+Eigen::Vector3d ContactTerm::pair_product(const FlatPair& p, const double* x) const {
   // f = k n̂ (n̂·u) + kt (u − n̂ (n̂·u)) = kn (Δ·u) Δ + kt u, u = J x the change of
   // Δ = y_j(t_b) − y_i(t_a)
   const std::array<double, 4>& ba = m_basis[p.a];
   const std::array<double, 4>& bb = m_basis[p.b];
+  const double* xi = x + 3 * p.ci;
+  const double* xj = x + 3 * p.cj;
   double u[3] = {0, 0, 0};
   for (int c = 0; c < 4; ++c)
     for (int d = 0; d < 3; ++d) u[d] += bb[c] * xj[3 * c + d] - ba[c] * xi[3 * c + d];
@@ -797,22 +840,17 @@ Eigen::Vector3d ContactTerm::pair_product(const StiffPair& p, const double* xi,
 template <class Force, class Slot>
 void ContactTerm::segment_product(int s, Force&& force, Slot& slot) const {
   // K x puts B_b f on j's control points and −B_a f on i's
-  const std::vector<StiffPair>& own = m_row_stiff[s];
-  for (int t = 0; t < static_cast<int>(own.size()); ++t) {
-    const auto& f = force(s, own[t], m_stiff_offset[s] + t);
-    const std::array<double, 4>& ba = m_basis[own[t].a];
+  for (int k = m_stiff_offset[s]; k < m_stiff_offset[s + 1]; ++k) {
+    const auto& f = force(k);
+    const std::array<double, 4>& ba = m_basis[m_flat[k].a];
     for (int c = 0; c < 4; ++c) slot.template middleRows<3>(3 * c) -= ba[c] * f;
   }
   // the incoming segment pairs in ascending row k, each one run of row k's point pairs
-  for (int q = m_incoming_offset[s]; q < m_incoming_offset[s + 1]; ++q) {
-    const Incoming& in = m_incoming[q];
-    const PairForce& pf = m_pairs[in.k][in.index];
-    const std::vector<StiffPair>& row = m_row_stiff[in.k];
-    for (int t = pf.stiff_begin; t < pf.stiff_end; ++t) {
-      const auto& f = force(in.k, row[t], m_stiff_offset[in.k] + t);
-      const std::array<double, 4>& bb = m_basis[row[t].b];
-      for (int c = 0; c < 4; ++c) slot.template middleRows<3>(3 * c) += bb[c] * f;
-    }
+  for (int e = m_in_offset[s]; e < m_in_offset[s + 1]; ++e) {
+    const IncomingPoint& in = m_in_points[e];
+    const auto& f = force(in.k);
+    const std::array<double, 4>& bb = m_basis[in.b];
+    for (int c = 0; c < 4; ++c) slot.template middleRows<3>(3 * c) += bb[c] * f;
   }
 }
 
@@ -828,21 +866,17 @@ void ContactTerm::add_stiffness_product(const Model& model, const Eigen::VectorX
   }
   m_stiff_product.resize(m_stiff_offset[rows]);
   // per point pair its force (pair_product), then per segment their sum (segment_product)
-  tbb::parallel_for(tbb::blocked_range<int>(0, rows, 16), [&](const tbb::blocked_range<int>& r) {
-    for (int i = r.begin(); i < r.end(); ++i) {
-      const double* xi = x.data() + 3 * model.seg_cp[i];
-      const std::vector<StiffPair>& own = m_row_stiff[i];
-      for (int t = 0; t < static_cast<int>(own.size()); ++t)
-        m_stiff_product[m_stiff_offset[i] + t] =
-            pair_product(own[t], xi, x.data() + 3 * model.seg_cp[own[t].j]);
-    }
-  });
+  tbb::parallel_for(tbb::blocked_range<int>(0, m_stiff_offset[rows], 256),
+                    [&](const tbb::blocked_range<int>& r) {
+                      for (int k = r.begin(); k < r.end(); ++k)
+                        m_stiff_product[k] = pair_product(m_flat[k], x.data());
+                    });
   // per segment, in a fixed order: its own row's pairs (it is i), then the pairs of rows
   // k < s that have it as j, in ascending k
   m_product_accumulator.run(model, [&](int s, Vector12d& slot) {
     if (s < rows)
       segment_product(
-          s, [&](int, const StiffPair&, int k) { return m_stiff_product[k]; }, slot);
+          s, [&](int k) { return m_stiff_product[k]; }, slot);
     return 0.0;
   });
   m_product_accumulator.gather(model, y, 1.0);
@@ -855,9 +889,7 @@ void ContactTerm::add_stiffness_product_rows(const Model& model, const Eigen::Ve
   const int rows = std::min<int>(m_num_seg, static_cast<int>(m_stiff_offset.size()) - 1);
   if (rows <= 0) return;
   // as add_stiffness_product, each listed segment's pairs taken afresh (a few segments)
-  auto force = [&](int row, const StiffPair& p, int) {
-    return pair_product(p, x.data() + 3 * model.seg_cp[row], x.data() + 3 * model.seg_cp[p.j]);
-  };
+  auto force = [&](int k) { return pair_product(m_flat[k], x.data()); };
   for (int s : segments) {
     if (s >= rows) continue;
     Vector12d slot = Vector12d::Zero();

@@ -204,6 +204,17 @@ class ContactTerm : public Term {
     int j = 0, a = 0, b = 0;
     double dx = 0, dy = 0, dz = 0, kn = 0, kt = 0;
   };
+  // a StiffPair as the products and the linearisation read it, all rows' in one array
+  // (index_incoming_pairs): the first control points ci of segment i and cj of j, and the
+  // damping's factor c2 = −2 ℓ_i ℓ_j w_a w_b (cm²); one cache line
+  struct FlatPair {
+    int ci = 0, cj = 0, a = 0, b = 0;
+    double dx = 0, dy = 0, dz = 0, kn = 0, kt = 0, c2 = 0;
+  };
+  // an incoming point pair of a segment (it is j): its index in m_flat, and its point on j
+  struct IncomingPoint {
+    int k = 0, b = 0;
+  };
   // the six numbers (xx, xy, xz, yy, yz, zz) of the sum of point pairs' stiffnesses at one
   // contact point of a segment (dyn/cm)
   struct PointStiffness {
@@ -231,15 +242,16 @@ class ContactTerm : public Term {
   // segment s's operator block as its 10 upper 3×3 blocks (u, v ≥ u in order; each
   // symmetric, xx xy xz yy yz zz); false where it is zero
   bool operator_block_upper(int s, double (*upper)[6]) const;
-  // m_incoming from the kernels' pairs (rows 0 … n − 1)
-  void index_incoming_pairs(int n);
+  // m_incoming from the kernels' pairs (rows 0 … n − 1), and with m_stiffness the point
+  // pairs flattened (m_flat, m_in_points)
+  void index_incoming_pairs(const Model& model, int n);
   // the stiffness product's force of point pair p, H (J x), from x at its segments' control
   // points xi (segment i's, the row that owns p) and xj
-  Eigen::Vector3d pair_product(const StiffPair& p, const double* xi, const double* xj) const;
-  // segment s's 12 entries of K x from each point pair's force(row, pair, number) (row: the
-  // segment that owns the pair): its own row's pairs (it is i), then the pairs of rows
-  // k < s that have it as j, in ascending k (Slot: Vector12d with a Vector3d per pair, or
-  // 12×2 with a 3×2, two products at once)
+  Eigen::Vector3d pair_product(const FlatPair& p, const double* x) const;
+  // segment s's 12 entries of K x from each point pair's force(k) (k: its index in
+  // m_flat): its own row's pairs (it is i), then the pairs of rows k < s that have it as j,
+  // in ascending k (Slot: Vector12d with a Vector3d per pair, or 12×2 with a 3×2, two
+  // products at once)
   template <class Force, class Slot>
   void segment_product(int s, Force&& force, Slot& slot) const;
   void tabulate_points(const Model& model, const Eigen::VectorXd& q, const Eigen::VectorXd& v);
@@ -293,8 +305,15 @@ class ContactTerm : public Term {
   std::vector<Incoming> m_incoming;
   std::vector<int> m_incoming_offset, m_incoming_fill;
   // with m_stiffness, the rows' point pairs stay in m_row_stiff; row i's are numbered
-  // [m_stiff_offset[i], m_stiff_offset[i + 1]) (the index of their products)
+  // [m_stiff_offset[i], m_stiff_offset[i + 1]) (the index of their products), and are
+  // copied in that order to m_flat; segment s's incoming ones, in segment_product's
+  // order, are m_in_points[m_in_offset[s] … m_in_offset[s + 1]). The products and the
+  // linearisation run over these flat arrays: a knit's rows hold a few point pairs each,
+  // and reading them row by row from their own vectors was mostly waiting for memory
   std::vector<int> m_stiff_offset;
+  std::vector<FlatPair> m_flat;
+  std::vector<IncomingPoint> m_in_points;
+  std::vector<int> m_in_offset;
   mutable std::vector<Eigen::Vector3d> m_stiff_product;  // per point pair: H (J x) (dyn)
   std::vector<RowStats> m_rows;
   std::vector<std::vector<ContactPointPair>> m_row_records;
