@@ -766,17 +766,8 @@ void ContactTerm::index_incoming_pairs(const Model& model, int n) {
       const double li = model.rest_length[i];
       FlatPair* out = m_flat.data() + m_stiff_offset[i];
       for (const StiffPair& p : m_row_stiff[i]) {
-        FlatPair& f = *out++;
-        f.ci = ci;
-        f.cj = model.seg_cp[p.j];
-        f.a = p.a;
-        f.b = p.b;
-        f.dx = p.dx;
-        f.dy = p.dy;
-        f.dz = p.dz;
-        f.kn = p.kn;
-        f.kt = p.kt;
-        f.c2 = -2.0 * li * model.rest_length[p.j] * quad.w[p.a] * quad.w[p.b];
+        const double c2 = -2.0 * li * model.rest_length[p.j] * quad.w[p.a] * quad.w[p.b];
+        *out++ = {ci, model.seg_cp[p.j], p.a, p.b, p.dx, p.dy, p.dz, p.kn, p.kt, c2};
       }
     }
   });
