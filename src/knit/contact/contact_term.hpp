@@ -246,7 +246,7 @@ class ContactTerm : public Term {
   // pairs flattened (m_flat, m_in_points)
   void index_incoming_pairs(const Model& model, int n);
   // the stiffness product's force of point pair p, H (J x), from x at its segments' control
-  // points xi (segment i's, the row that owns p) and xj
+  // points (p.ci, p.cj)
   Eigen::Vector3d pair_product(const FlatPair& p, const double* x) const;
   // segment s's 12 entries of K x from each point pair's force(k) (k: its index in
   // m_flat): its own row's pairs (it is i), then the pairs of rows k < s that have it as j,
