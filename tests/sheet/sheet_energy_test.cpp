@@ -261,7 +261,7 @@ TEST(SheetAssembly, CachedPatternAssemblyMatchesTriplets) {
   plain.jacobian_pattern = Eigen::SparseMatrix<double>();
   const Eigen::VectorXd x = jitter(mesh.rest_positions(), 0.15, 8);
   const Eigen::VectorXd v = jitter(Eigen::VectorXd::Zero(mesh.num_dofs()), 2.0, 9);
-  for (Jacobians kind : {Jacobians::PSD, Jacobians::EXACT}) {
+  for (Jacobians kind : {Jacobians::PSD, Jacobians::EXACT, Jacobians::PROJECTED}) {
     const SheetForces a = evaluate_forces(mesh, test_material(), x, v, {0, 0, -9.81}, kind);
     const SheetForces b = evaluate_forces(plain, test_material(), x, v, {0, 0, -9.81}, kind);
     const double scale = Eigen::MatrixXd(b.dfdx).cwiseAbs().maxCoeff();
@@ -290,6 +290,42 @@ TEST(SheetAssembly, CachedPatternAssemblyMatchesTriplets) {
                   Jacobians::NONE, none);
   EXPECT_EQ(none.dfdx.nonZeros(), 0);
   EXPECT_EQ(none.dfdv.nonZeros(), 0);
+}
+
+// The projected Hessian (each element's exact Hessian with its negative eigenvalues set to
+// zero) is the exact one plus each element's negative part: so H_proj is PSD, H_proj − H_exact
+// is PSD, both carry the rigid translations in their null space, and where every element's
+// exact Hessian is PSD already (uniform tension with no shear or fold) they are equal.
+TEST(SheetAssembly, ProjectedHessianIsTheExactOneMadePositive) {
+  const SheetMesh mesh = small_mesh();
+  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(mesh.num_dofs());
+  const Eigen::Vector3d g(0, 0, 0);
+  // a strongly deformed state: sheared, compressed and folded elements have negative curvature
+  const Eigen::VectorXd x = jitter(mesh.rest_positions(), 0.3, 21);
+  const Eigen::MatrixXd hp = -Eigen::MatrixXd(
+      evaluate_forces(mesh, test_material(), x, zero, g, Jacobians::PROJECTED).dfdx);
+  const Eigen::MatrixXd he =
+      -Eigen::MatrixXd(evaluate_forces(mesh, test_material(), x, zero, g, Jacobians::EXACT).dfdx);
+  const double scale = he.cwiseAbs().maxCoeff();
+  const Eigen::VectorXd ep = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(hp).eigenvalues();
+  const Eigen::VectorXd ee = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(he).eigenvalues();
+  ASSERT_LT(ee.minCoeff(), -1e-3 * scale) << "the exact Hessian is PSD here: the test is vacuous";
+  EXPECT_GT(ep.minCoeff(), -1e-12 * scale);
+  EXPECT_GT(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(hp - he).eigenvalues().minCoeff(),
+            -1e-12 * scale);
+  for (int d = 0; d < 3; ++d) {  // a rigid translation along d is in the null space
+    Eigen::VectorXd t = zero;
+    for (int i = 0; i < mesh.num_nodes(); ++i) t[3 * i + d] = 1;
+    EXPECT_LT((hp * t).cwiseAbs().maxCoeff(), 1e-12 * scale * mesh.num_nodes());
+  }
+  // uniform tension (the flat sheet dilated by 10 %, unsheared): every element's exact
+  // Hessian is PSD, and the projection leaves it as it is
+  const Eigen::VectorXd xs = 1.1 * mesh.rest_positions();
+  const Eigen::MatrixXd hs_p = -Eigen::MatrixXd(
+      evaluate_forces(mesh, test_material(), xs, zero, g, Jacobians::PROJECTED).dfdx);
+  const Eigen::MatrixXd hs_e =
+      -Eigen::MatrixXd(evaluate_forces(mesh, test_material(), xs, zero, g, Jacobians::EXACT).dfdx);
+  EXPECT_LT((hs_p - hs_e).cwiseAbs().maxCoeff(), 1e-10 * hs_e.cwiseAbs().maxCoeff());
 }
 
 TEST(SheetAssembly, RestMeshHasZeroEnergyAndForce) {

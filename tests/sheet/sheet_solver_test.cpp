@@ -3,7 +3,11 @@
 // comes to rest holding its weight, stability at a large step, and momentum conservation.
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
+
+#include <array>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 #include <string>
 
@@ -83,6 +87,112 @@ TEST(SheetStatics, UniaxialTensionAlongUMatchesTheModulus) {
 }
 TEST(SheetStatics, UniaxialTensionAlongVMatchesTheModulus) {
   check_uniaxial(false);
+}
+
+// A square pulled along its diagonal by clamps at two opposite corners (the bias test of
+// `knitsim stretch --sheet`): it stretches along the pull and is compressed across it. Flat,
+// that is a saddle of the energy — a thin sheet wrinkles out of its plane to relieve the
+// compression. BW's PSD (Gauss–Newton) Hessian has no negative curvature to see this and
+// stops on the flat saddle; the projected Newton iteration (the exact Hessian where it is
+// positive definite, each element's projection where not) goes on to a stable minimum,
+// lower in energy, where the exact Hessian on the free nodes is positive semi-definite.
+TEST(SheetStatics, BiasPullWrinklesToAStableMinimumBelowTheFlatSaddle) {
+  const double side = 10.0;
+  const SheetMesh mesh = make_rectangle(Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX(),
+                                        Eigen::Vector3d::UnitY(), side, side, 9, 9);
+  SheetMaterial mat;
+  mat.k_stretch_u = 3e3;  // dyn/cm: shear as stiff as stretch, as the 42×32 knits' fit asks
+  mat.k_stretch_v = 3e3;
+  mat.k_shear = 3e3;
+  mat.k_bend = 1e-2;                   // erg: a thin sheet
+  auto corner = [&](int i0, int j0) {  // a 2 × 2 block of nodes at a corner
+    std::vector<int> nodes;
+    for (int j = j0; j < j0 + 2; ++j)
+      for (int i = i0; i < i0 + 2; ++i) nodes.push_back(j * mesh.nu + i);
+    return nodes;
+  };
+  const std::vector<SheetConstraint> clamps = {{"fixed", corner(0, 0), Eigen::Vector3d::Zero()},
+                                               {"moving", corner(7, 7), Eigen::Vector3d::Zero()}};
+  std::vector<bool> held(mesh.num_nodes(), false);
+  for (const SheetConstraint& c : clamps)
+    for (int n : c.nodes) held[n] = true;
+  // the smallest eigenvalue of the exact Hessian on the free nodes, relative to its largest
+  auto lowest_curvature = [&](const Eigen::VectorXd& x) {
+    const Eigen::MatrixXd h =
+        -Eigen::MatrixXd(evaluate_forces(mesh, mat, x, Eigen::VectorXd::Zero(x.size()),
+                                         Eigen::Vector3d::Zero(), Jacobians::EXACT)
+                             .dfdx);
+    std::vector<int> free;
+    for (int n = 0; n < mesh.num_nodes(); ++n)
+      if (!held[n])
+        for (int d = 0; d < 3; ++d) free.push_back(3 * n + d);
+    Eigen::MatrixXd hf(free.size(), free.size());
+    for (size_t r = 0; r < free.size(); ++r)
+      for (size_t c = 0; c < free.size(); ++c) hf(r, c) = h(free[r], free[c]);
+    const Eigen::VectorXd e = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(hf).eigenvalues();
+    return e.minCoeff() / e.cwiseAbs().maxCoeff();
+  };
+  const Eigen::Vector3d axis = Eigen::Vector3d(1, 1, 0).normalized();
+  std::array<SheetState, 2> states;
+  std::array<StaticReport, 2> reports;
+  const Jacobians kinds[2] = {Jacobians::PROJECTED, Jacobians::PSD};
+  for (int k = 0; k < 2; ++k) {
+    SheetState& state = states[k];
+    state = rest_state(mesh);
+    for (int n : clamps[1].nodes) state.positions.segment<3>(3 * n) += 0.15 * side * axis;
+    StaticSettings settings;
+    settings.gravity.setZero();
+    settings.max_iterations = 2000;
+    settings.force_tolerance = 1e-9 * mat.k_shear * side;
+    settings.hessian = kinds[k];
+    reports[k] = solve_static(mesh, mat, clamps, settings, state);
+    const char* name = k == 0 ? "projected" : "PSD";
+    ASSERT_TRUE(reports[k].converged) << name << ": residual " << reports[k].residual << " after "
+                                      << reports[k].iterations << " iterations";
+    const double force = reports[k].reactions[1].dot(axis);
+    EXPECT_GT(force, 0.0) << name;
+    EXPECT_LT((reports[k].reactions[0] + reports[k].reactions[1]).norm(), 1e-6 * force) << name;
+  }
+  double out_of_plane = 0;
+  for (int n = 0; n < mesh.num_nodes(); ++n)
+    out_of_plane = std::max(out_of_plane, std::abs(states[0].positions[3 * n + 2]));
+  EXPECT_GT(out_of_plane, 0.01 * side) << "the projected solve did not leave the plane";
+  EXPECT_TRUE(reports[0].stable);
+  EXPECT_FALSE(reports[1].stable);  // PSD does not look
+  // started on the flat saddle itself, where the force is already within tolerance, the
+  // projected solve must see the saddle and leave it along its negative curvature
+  {
+    SheetState from_saddle = states[1];
+    StaticSettings settings;
+    settings.gravity.setZero();
+    settings.max_iterations = 2000;
+    settings.force_tolerance = 1e-9 * mat.k_shear * side;
+    const StaticReport r = solve_static(mesh, mat, clamps, settings, from_saddle);
+    ASSERT_TRUE(r.converged) << "from the saddle: residual " << r.residual;
+    EXPECT_GE(r.escapes, 1) << "it did not see the saddle";
+    EXPECT_TRUE(r.stable);
+    EXPECT_LT(r.energy, 0.99 * reports[1].energy);
+    EXPECT_GT(lowest_curvature(from_saddle.positions), -1e-9);
+  }
+  EXPECT_LT(reports[0].energy, 0.99 * reports[1].energy);
+  EXPECT_LT(lowest_curvature(states[1].positions), -1e-4) << "the flat state is not a saddle";
+  EXPECT_GT(lowest_curvature(states[0].positions), -1e-9) << "the wrinkled state is not a minimum";
+  std::printf(
+      "bias pull: projected Newton %d iterations to %.4f erg (wrinkled %.3f cm out of "
+      "plane), PSD %d to the flat saddle at %.4f erg\n",
+      reports[0].iterations, reports[0].energy, out_of_plane, reports[1].iterations,
+      reports[1].energy);
+}
+
+TEST(SheetStatics, SolveStaticRejectsAHessianItCannotUse) {
+  const SheetMesh mesh = make_rectangle(Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX(),
+                                        Eigen::Vector3d::UnitY(), 2.0, 2.0, 3, 3);
+  SheetState state = rest_state(mesh);
+  for (Jacobians bad : {Jacobians::NONE, Jacobians::EXACT}) {
+    StaticSettings settings;
+    settings.hessian = bad;
+    EXPECT_THROW(solve_static(mesh, SheetMaterial{}, {}, settings, state), std::invalid_argument);
+  }
 }
 
 // a 10 cm × 10 cm sheet hanging in the x–z plane from its top row

@@ -1,5 +1,6 @@
 #include "knit/sheet/bw_energy.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
@@ -98,6 +99,14 @@ void add_block(const Eigen::Matrix<double, N, N>& m, const int* nodes, const int
         double* v = values + outer[3 * nodes[b] + c] + slots[n * a + b];
         for (int r = 0; r < 3; ++r) v[r] += m(3 * a + r, 3 * b + c);
       }
+}
+
+// the nearest PSD matrix to a symmetric element Hessian: its negative eigenvalues set to 0
+template <int N>
+void project_psd(Eigen::Matrix<double, N, N>& h) {
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, N, N>> eig(h);
+  const Eigen::Matrix<double, N, 1> lambda = eig.eigenvalues().cwiseMax(0.0);
+  h = eig.eigenvectors() * lambda.asDiagonal() * eig.eigenvectors().transpose();
 }
 
 // scatters a local N×N block into triplets
@@ -222,10 +231,12 @@ void evaluate_forces(const SheetMesh& mesh, const SheetMaterial& material, const
   check_size(x, n, "positions");
   check_size(v, n, "velocities");
   const bool jac = jacobians != Jacobians::NONE;
-  const HessianKind kind = jacobians == Jacobians::EXACT ? HessianKind::EXACT : HessianKind::PSD;
-  // the bending condition's curvature is needed only for the exact Hessian; the stretch and
-  // shear ones are cheap, and the PSD stretch Hessian uses its curvature
-  const bool bend_curvature = jacobians == Jacobians::EXACT;
+  const bool project = jacobians == Jacobians::PROJECTED;
+  const HessianKind kind = jacobians == Jacobians::PSD ? HessianKind::PSD : HessianKind::EXACT;
+  // the bending condition's curvature is needed only for the exact Hessian (and its
+  // projection); the stretch and shear ones are cheap, and the PSD stretch Hessian uses its
+  // curvature
+  const bool bend_curvature = kind == HessianKind::EXACT;
 
   out.elastic_energy = out.stretch_energy = out.shear_energy = out.bend_energy = 0;
   out.gravity_energy = 0;
@@ -275,6 +286,7 @@ void evaluate_forces(const SheetMesh& mesh, const SheetMaterial& material, const
     out.shear_energy += condition_energy(sh, material.k_shear, &g, hp, kind);
     condition_damping(sh, vt, material.d_shear, &f, dvp);
     f -= g;
+    if (jac && project) project_psd(h);
     for (int k = 0; k < 3; ++k) out.force.segment<3>(3 * tri[k]) += f.segment<3>(3 * k);
     if (jac && cached) {
       add_block<9>(-h, tri.data(), mesh.triangle_slots[t].data(), out.dfdx);
@@ -295,6 +307,7 @@ void evaluate_forces(const SheetMesh& mesh, const SheetMaterial& material, const
     out.bend_energy += condition_energy(c, material.k_bend, &g, jac ? &h : nullptr, kind);
     condition_damping(c, vh, material.d_bend, &f, jac ? &dv : nullptr);
     f -= g;
+    if (jac && project) project_psd(h);
     for (int k = 0; k < 4; ++k) out.force.segment<3>(3 * nodes[k]) += f.segment<3>(3 * k);
     if (jac && cached) {
       add_block<12>(-h, nodes, mesh.hinge_slots[e].data(), out.dfdx);

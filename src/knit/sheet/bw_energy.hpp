@@ -38,7 +38,12 @@
 //   PSD:   k (∇C ∇Cᵀ + max(C, 0) ∇²C) for stretch  — ∇²C_u is PSD, so this is the exact
 //          Hessian under tension and BW's Gauss–Newton one under compression;
 //          k ∇C ∇Cᵀ for shear and bend            — BW's choice: drop C ∇²C (indefinite).
-// Both are translation invariant (rows sum to zero), so an implicit step keeps momentum.
+//   PROJECTED: each element's exact Hessian (a triangle's stretch and shear together, a
+//          hinge's bend) with its negative eigenvalues set to zero — the nearest PSD matrix
+//          to it (projected Newton). It keeps the curvature that PSD drops wherever that
+//          curvature is positive, which is what a shear-dominated (bias) statics needs to
+//          converge in few Newton iterations; PSD's Gauss–Newton shear converges linearly.
+// All are translation invariant (rows sum to zero), so an implicit step keeps momentum.
 //
 // Damping (BW §4.5): d = −k_d ∇C Ċ with Ċ = ∇Cᵀ v, velocity Jacobian ∂d/∂v = −k_d ∇C ∇Cᵀ;
 // its position derivative is neglected, as in BW. Units: k_d in s·dyn/cm for stretch and
@@ -135,7 +140,7 @@ double bend_energy(const Vector12d& x, double rest_angle, double k, Vector12d* g
                    Matrix12d* hess, HessianKind kind = HessianKind::EXACT);
 
 /// Which Jacobians evaluate_forces assembles.
-enum class Jacobians { NONE, PSD, EXACT };
+enum class Jacobians { NONE, PSD, EXACT, PROJECTED };
 
 /// Energies, forces and Jacobians of the whole sheet at one state.
 struct SheetForces {
@@ -147,7 +152,7 @@ struct SheetForces {
   /// Potential energy elastic + gravity, erg (damping is not conservative).
   double energy() const { return elastic_energy + gravity_energy; }
   Eigen::VectorXd force;             ///< −∂E/∂x + damping, dyn, 3 per node
-  Eigen::SparseMatrix<double> dfdx;  ///< ∂f/∂x = −(Hessian of E, PSD or EXACT), dyn/cm
+  Eigen::SparseMatrix<double> dfdx;  ///< ∂f/∂x = −(Hessian of E, PSD, EXACT or PROJECTED), dyn/cm
   Eigen::SparseMatrix<double> dfdv;  ///< ∂f/∂v of the damping forces, dyn·s/cm
 };
 

@@ -4,6 +4,7 @@
 #include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -247,6 +248,8 @@ StaticReport solve_static(const SheetMesh& mesh, const SheetMaterial& material,
                           const StaticSettings& settings, SheetState& state) {
   if (settings.max_iterations < 0)
     throw std::invalid_argument("solve_static: max_iterations must be >= 0");
+  if (settings.hessian != Jacobians::PSD && settings.hessian != Jacobians::PROJECTED)
+    throw std::invalid_argument("solve_static: hessian must be PSD or PROJECTED");
   check_state(mesh, state, "solve_static");
   const std::vector<int> owner = constraint_owner(mesh, constraints);
   int n_free = 0;
@@ -259,44 +262,150 @@ StaticReport solve_static(const SheetMesh& mesh, const SheetMaterial& material,
   double start_residual = -1;
   std::optional<FreeBlock> block;
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt;
-  SheetForces f = evaluate_forces(mesh, material, x, zero_v, g, Jacobians::PSD);
-  for (;;) {
-    const double residual = max_abs_free(f.force, map);
-    if (start_residual < 0) start_residual = residual;
-    report.residual = residual;
-    if (residual <=
-        std::max(settings.force_tolerance, settings.relative_tolerance * start_residual)) {
-      report.converged = true;
-      break;
-    }
-    if (report.iterations >= settings.max_iterations) break;
-    ++report.iterations;
-
-    // Newton direction on the free DOFs: H d = f, H = −∂f/∂x (PSD). The pattern is the
-    // mesh's every iteration: its free block and the factorisation's ordering are set up once
+  // PROJECTED: each iteration tries the exact Hessian first (Newton's own step, quadratic
+  // convergence near a stable state), shifted or projected where it is not positive
+  // definite (below); the forces are evaluated with the exact Hessian
+  const bool projected = settings.hessian == Jacobians::PROJECTED;
+  const Jacobians first = projected ? Jacobians::EXACT : Jacobians::PSD;
+  SheetForces f = evaluate_forces(mesh, material, x, zero_v, g, first), fp;
+  // the free block of the pattern, and the factorisation's ordering, set up once: the pattern
+  // is the mesh's every iteration
+  auto setup_block = [&] {
     if (!f.dfdx.isCompressed() || (block && f.dfdx.nonZeros() != block->full_nonzeros))
       throw std::logic_error("solve_static: the sheet's Jacobian changed its pattern");
     if (!block) {
       block.emplace(f.dfdx, map, n_free);
       ldlt.analyzePattern(block->matrix);
     }
-    const Eigen::VectorXd ff = restrict_vector(f.force, map, n_free);
-    Eigen::VectorXd d;
-    block->fill(f.dfdx, -1, 0);
-    const double diag = block->matrix.diagonal().cwiseAbs().maxCoeff();
-    bool ok = false;
-    for (double mu = 0; mu < 1e3 * diag; mu = (mu == 0 ? 1e-10 * diag : 100 * mu)) {
-      if (mu > 0) block->fill(f.dfdx, -1, mu);
+  };
+  bool escaped = false;
+  double shift = 0;  // the exact Hessian's diagonal shift in the iteration before
+  double shortest_edge = std::numeric_limits<double>::infinity();  // rest, cm
+  for (const auto& t : mesh.triangles)
+    for (int k = 0; k < 3; ++k)
+      shortest_edge =
+          std::min(shortest_edge, (mesh.rest.col(t[k]) - mesh.rest.col(t[(k + 1) % 3])).norm());
+  double size = 0;  // the sheet's extent, cm: the scale of a step out of a saddle
+  for (int d = 0; d < 3; ++d)
+    size = std::max(size, x(Eigen::seqN(d, mesh.num_nodes(), 3)).maxCoeff() -
+                              x(Eigen::seqN(d, mesh.num_nodes(), 3)).minCoeff());
+  for (;;) {
+    const double residual = max_abs_free(f.force, map);
+    if (start_residual < 0) start_residual = residual;
+    report.residual = residual;
+    // after leaving a saddle, at least one Newton iteration before the next check
+    if (!escaped && residual <= std::max(settings.force_tolerance,
+                                         settings.relative_tolerance * start_residual)) {
+      report.converged = true;
+      if (!projected || n_free == 0) break;
+      // An equilibrium: stable where the exact Hessian on the free nodes is positive
+      // definite. Otherwise it is a saddle (a flat sheet compressed across a pull, which a
+      // thin sheet leaves by wrinkling): leave it along the exact Hessian's direction of
+      // negative curvature from its factorisation, z = P⁻¹ L⁻ᵀ eᵢ with zᵀ H z = Dᵢ < 0, by
+      // the step along ±z that lowers the energy most, and iterate again.
+      setup_block();
+      block->fill(f.dfdx, -1, 0);
       ldlt.factorize(block->matrix);
-      if (ldlt.info() != Eigen::Success) continue;
-      d = ldlt.solve(ff);
-      if (d.allFinite() && d.dot(ff) > 0 && (ldlt.vectorD().array() > 0).all()) {
-        ok = true;
+      if (ldlt.info() != Eigen::Success) break;  // singular: stability unknown
+      Eigen::Index i = 0;
+      if (ldlt.vectorD().minCoeff(&i) > 0) {
+        report.stable = true;
         break;
       }
+      if (report.escapes >= settings.max_escapes) break;
+      Eigen::VectorXd y = Eigen::VectorXd::Unit(n_free, i);
+      ldlt.matrixU().solveInPlace(y);
+      Eigen::VectorXd z = ldlt.permutationPinv() * y;
+      if (!z.allFinite() || !(z.cwiseAbs().maxCoeff() > 0)) break;
+      z /= z.cwiseAbs().maxCoeff();
+      const double e0 = f.energy();
+      double best_e = e0;
+      Eigen::VectorXd best;
+      for (double step = 1e-6 * size; step <= 0.1 * size; step *= 4)
+        for (double sign : {1.0, -1.0}) {
+          Eigen::VectorXd xt = x;
+          for (size_t k = 0; k < map.size(); ++k)
+            if (map[k] >= 0) xt[k] += sign * step * z[map[k]];
+          const double et = potential_energy(mesh, material, xt, g);
+          if (std::isfinite(et) && et < best_e) {
+            best_e = et;
+            best = std::move(xt);
+          }
+        }
+      if (best.size() == 0) {  // no lower energy along it: a minimum as far as round-off tells
+        report.stable = true;
+        break;
+      }
+      ++report.escapes;
+      escaped = true;
+      report.converged = false;
+      x = std::move(best);
+      evaluate_forces(mesh, material, x, zero_v, g, first, f);
+      continue;
+    }
+    escaped = false;
+    if (report.iterations >= settings.max_iterations) break;
+    ++report.iterations;
+
+    // Newton direction on the free DOFs: H d = f, H = −∂f/∂x (PSD, or the exact or projected
+    // one)
+    setup_block();
+    const Eigen::VectorXd ff = restrict_vector(f.force, map, n_free);
+    Eigen::VectorXd d;
+    // the step from H with μ added to its diagonal, when H + μ is positive definite
+    auto try_step = [&](const Eigen::SparseMatrix<double>& dfdx, double mu) {
+      block->fill(dfdx, -1, mu);
+      ldlt.factorize(block->matrix);
+      if (ldlt.info() != Eigen::Success) return false;
+      d = ldlt.solve(ff);
+      return d.allFinite() && d.dot(ff) > 0 && (ldlt.vectorD().array() > 0).all();
+    };
+    // PROJECTED: the exact Hessian, shifted by μ on its diagonal where it is not positive
+    // definite (Levenberg–Marquardt: the shift of the iteration before, a quarter of it
+    // first, grown fourfold until the factor is positive); the projected Hessian only where
+    // a shift of 1e-3 of the diagonal does not do
+    bool ok = false;
+    if (projected) {
+      block->fill(f.dfdx, -1, 0);
+      const double diag = block->matrix.diagonal().cwiseAbs().maxCoeff();
+      double mu = shift < 1e-9 * diag ? 0 : shift / 4;
+      for (;;) {
+        if ((ok = try_step(f.dfdx, mu))) break;
+        mu = mu == 0 ? 1e-9 * diag : 4 * mu;
+        if (mu > 1e-3 * diag) break;
+      }
+      shift = ok ? mu : 1e-3 * diag;
+    }
+    if (!ok) {
+      const Eigen::SparseMatrix<double>* h = &f.dfdx;
+      if (projected) {
+        evaluate_forces(mesh, material, x, zero_v, g, Jacobians::PROJECTED, fp);
+        h = &fp.dfdx;
+      }
+      block->fill(*h, -1, 0);
+      const double diag = block->matrix.diagonal().cwiseAbs().maxCoeff();
+      for (double mu = 0; mu < 1e3 * diag && !ok; mu = (mu == 0 ? 1e-10 * diag : 100 * mu))
+        ok = try_step(*h, mu);
     }
     if (!ok) break;
 
+    // PROJECTED: no node moves more than half the shortest rest edge in one iteration (a
+    // trust region). The BW energy lets a triangle fold over its neighbour for a bounded
+    // bending energy, and a long step into a fold collapses triangles on the way, where the
+    // bending force grows without bound
+    if (projected) {
+      double longest = 0;
+      for (size_t k = 0; k + 2 < map.size(); k += 3) {
+        double m2 = 0;
+        for (int c = 0; c < 3; ++c)
+          if (map[k + c] >= 0) m2 += d[map[k + c]] * d[map[k + c]];
+        longest = std::max(longest, m2);
+      }
+      longest = std::sqrt(longest);
+      if (longest > 0.5 * shortest_edge) {
+        d *= 0.5 * shortest_edge / longest;
+      }
+    }
     // backtracking line search: Armijo on the energy, or (near the minimum, where the energy
     // change drowns in round-off) a decrease of the force residual
     const double e0 = f.energy(), slope = d.dot(ff), fnorm = ff.norm();
@@ -308,7 +417,9 @@ StaticReport solve_static(const SheetMesh& mesh, const SheetMaterial& material,
       const double et = potential_energy(mesh, material, xt, g);
       bool accept = std::isfinite(et) && et <= e0 - 1e-4 * alpha * slope;
       SheetForces ft;
-      if (!accept && std::isfinite(et)) {
+      // PROJECTED: the residual's test only where the energy did not rise beyond its
+      // round-off (taken anywhere, it let a soft-sheared sheet climb into folds)
+      if (!accept && std::isfinite(et) && (!projected || et <= e0 + 1e-12 * std::abs(e0))) {
         ft = evaluate_forces(mesh, material, xt, zero_v, g, Jacobians::NONE);
         accept = restrict_vector(ft.force, map, n_free).norm() < (1 - 1e-4 * alpha) * fnorm;
       }
@@ -319,7 +430,7 @@ StaticReport solve_static(const SheetMesh& mesh, const SheetMaterial& material,
       }
     }
     if (!accepted) break;
-    evaluate_forces(mesh, material, x, zero_v, g, Jacobians::PSD, f);
+    evaluate_forces(mesh, material, x, zero_v, g, first, f);
   }
   report.energy = f.energy();
   report.reactions = sum_per_constraint(constraints, -f.force);

@@ -81,11 +81,23 @@ struct StaticSettings {
   int max_iterations = 100;                               ///< Newton iterations
   double force_tolerance = 1e-9;      ///< converged when max |f| on a free DOF ≤ this, dyn …
   double relative_tolerance = 1e-10;  ///< … or ≤ this × its value at the start
+  /// The Newton matrix. PROJECTED: the exact Hessian where it is positive definite, shifted
+  /// on its diagonal (up to 1e-3 of it) or each element's projected onto the PSD matrices
+  /// where not, with the saddle check below: it reaches the wrinkled minimum of a bias pull,
+  /// which PSD (BW's Gauss–Newton shear and bend, no check) stops short of or creeps
+  /// toward. Not NONE or EXACT.
+  Jacobians hessian = Jacobians::PROJECTED;
+  /// PROJECTED: how many times a solve may leave a saddle it converged to (below)
+  int max_escapes = 20;
 };
 
 /// What solve_static did.
 struct StaticReport {
   bool converged = false;
+  /// PROJECTED: the equilibrium is a minimum (the exact Hessian on the free nodes positive
+  /// definite); false for PSD, and where max_escapes saddles were left and it still is one
+  bool stable = false;
+  int escapes = 0;                         ///< saddles left along negative curvature
   int iterations = 0;                      ///< Newton iterations
   double residual = 0;                     ///< max |f| over free DOFs at the end, dyn
   double energy = 0;                       ///< potential energy at the end, erg
@@ -93,9 +105,13 @@ struct StaticReport {
 };
 
 /// Finds the equilibrium of the free nodes with the constrained nodes held where `state`
-/// has them: Newton iterations on the PSD Hessian (bw_energy.hpp) with a sparse Cholesky
+/// has them: Newton iterations on settings.hessian (bw_energy.hpp) with a sparse Cholesky
 /// solve (a multiple of the mass matrix is added when it is singular) and a backtracking
-/// line search on the potential energy. Sets all velocities to zero; time is unchanged.
+/// line search on the potential energy. With PROJECTED an equilibrium it converges to is
+/// checked by the exact Hessian: a saddle (a flat sheet compressed across a pull, which a
+/// thin sheet leaves by wrinkling) is left along its direction of negative curvature and
+/// the iterations go on, so that the solve ends at a stable equilibrium (report.stable).
+/// Sets all velocities to zero; time is unchanged.
 /// Does not throw when it does not converge: check StaticReport::converged.
 StaticReport solve_static(const SheetMesh& mesh, const SheetMaterial& material,
                           const std::vector<SheetConstraint>& constraints,
