@@ -73,9 +73,9 @@ StaticSample solve_at(const KnitSheet& ks, const StretchGeometry& g,
   sheet::StaticSettings settings;
   settings.gravity.setZero();
   settings.max_iterations = 2000;  // shear far stiffer than stretch converges slowly (Gauss–Newton)
-  // BW's Gauss–Newton matrix: the projected Newton iteration reaches a bias pull's wrinkled
-  // minimum, but with a soft shear it folds the sheet onto collapsed triangles past strain
-  // 0.4 (docs/core.md), where this one fails less often
+  // BW's Gauss–Newton matrix (the default): the projected Newton iteration reaches a bias
+  // pull's wrinkled minimum, but with a soft shear it folds the sheet onto collapsed
+  // triangles past strain 0.4 (docs/core.md), where this one fails less often
   settings.hessian = sheet::Jacobians::PSD;
   // converged when the free nodes' force is a billionth of the stiffest modulus times the
   // sample's size (dyn) or 1e-8 of where it started: round-off limits stiff sheets

@@ -85,8 +85,9 @@ struct StaticSettings {
   /// on its diagonal (up to 1e-3 of it) or each element's projected onto the PSD matrices
   /// where not, with the saddle check below: it reaches the wrinkled minimum of a bias pull,
   /// which PSD (BW's Gauss–Newton shear and bend, no check) stops short of or creeps
-  /// toward. Not NONE or EXACT.
-  Jacobians hessian = Jacobians::PROJECTED;
+  /// toward; but with a soft shear it folds the sheet onto collapsed triangles, where the
+  /// bend force has no bound (docs/core.md), so PSD stays the default. Not NONE or EXACT.
+  Jacobians hessian = Jacobians::PSD;
   /// PROJECTED: how many times a solve may leave a saddle it converged to (below)
   int max_escapes = 20;
 };
@@ -106,7 +107,7 @@ struct StaticReport {
 
 /// Finds the equilibrium of the free nodes with the constrained nodes held where `state`
 /// has them: Newton iterations on settings.hessian (bw_energy.hpp) with a sparse Cholesky
-/// solve (a multiple of the mass matrix is added when it is singular) and a backtracking
+/// solve (a multiple of the identity is added where it is not positive definite) and a backtracking
 /// line search on the potential energy. With PROJECTED an equilibrium it converges to is
 /// checked by the exact Hessian: a saddle (a flat sheet compressed across a pull, which a
 /// thin sheet leaves by wrinkling) is left along its direction of negative curvature and
