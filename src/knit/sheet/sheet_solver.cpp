@@ -141,6 +141,15 @@ std::vector<Eigen::Vector3d> sum_per_constraint(const std::vector<SheetConstrain
   return r;
 }
 
+// x moved by scale · d on the free DOFs (d holds one entry per free DOF)
+Eigen::VectorXd moved_free(const Eigen::VectorXd& x, const Eigen::VectorXd& d, double scale,
+                           const std::vector<int>& map) {
+  Eigen::VectorXd xt = x;
+  for (size_t k = 0; k < map.size(); ++k)
+    if (map[k] >= 0) xt[k] += scale * d[map[k]];
+  return xt;
+}
+
 double max_abs_free(const Eigen::VectorXd& f, const std::vector<int>& map) {
   double m = 0;
   for (size_t k = 0; k < map.size(); ++k)
@@ -323,9 +332,7 @@ StaticReport solve_static(const SheetMesh& mesh, const SheetMaterial& material,
       Eigen::VectorXd best;
       for (double step = 1e-6 * size; step <= 0.1 * size; step *= 4)
         for (double sign : {1.0, -1.0}) {
-          Eigen::VectorXd xt = x;
-          for (size_t k = 0; k < map.size(); ++k)
-            if (map[k] >= 0) xt[k] += sign * step * z[map[k]];
+          Eigen::VectorXd xt = moved_free(x, z, sign * step, map);
           const double et = potential_energy(mesh, material, xt, g);
           if (std::isfinite(et) && et < best_e) {
             best_e = et;
@@ -411,9 +418,7 @@ StaticReport solve_static(const SheetMesh& mesh, const SheetMaterial& material,
     const double e0 = f.energy(), slope = d.dot(ff), fnorm = ff.norm();
     bool accepted = false;
     for (double alpha = 1; alpha > 1e-8; alpha *= 0.5) {
-      Eigen::VectorXd xt = x;
-      for (size_t k = 0; k < map.size(); ++k)
-        if (map[k] >= 0) xt[k] += alpha * d[map[k]];
+      Eigen::VectorXd xt = moved_free(x, d, alpha, map);
       const double et = potential_energy(mesh, material, xt, g);
       bool accept = std::isfinite(et) && et <= e0 - 1e-4 * alpha * slope;
       SheetForces ft;
