@@ -33,10 +33,10 @@
 # cast on too (`relax --cast-on`), so that a bias pull cannot draw the first row's yarn out
 # at the fixed corner either; they go to out/stretch/RxC_bound_cast.
 # --sheet-directions LIST: the sheet's fit and pulls in these directions only (default
-# course,wale,bias; course is needed). The bias fit and pulls of the sheet are slow: a
-# 12×12 bias sheet pull takes minutes, 100× its course pull. At 42×32 its fit does not
-# converge (README, "The elastic sheet at 42×32"), so leave bias out there. The fit is
-# kept in the stockinette's course sheet run: remove the *_sheet runs after changing this.
+# course,wale,bias; course is needed). The bias fit and pulls of the sheet are the slow
+# ones: the sheet wrinkles along the bias (a 42×32 bias sheet pull takes about 10 minutes on
+# 1 thread, its course pull 1). The fit is kept in the stockinette's course sheet run:
+# remove the *_sheet runs after changing this.
 # --patterns LIST: the knits whose yarn pulls run now, a comma-separated subset of
 # stockinette,garter,rib2x2 (default all three; two instances with different patterns can
 # run side by side); the sheet and the figures wait until every yarn pull has ended.

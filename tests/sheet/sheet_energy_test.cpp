@@ -8,6 +8,7 @@
 #include <Eigen/Geometry>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <numbers>
 #include <random>
 #include <stdexcept>
@@ -144,28 +145,82 @@ TEST(SheetKernels, BendGradientAndHessianMatchFiniteDifferences) {
   for (double fold : folds)
     for (double rest : {0.0, 0.3}) {
       const Vector12d x = random_hinge(fold, ++seed);
+      // the triangles' areas 1.25× their rest areas in product: the weight is not 1
+      const double rp = 0.8 * bend_area_product(x);
       const std::string what =
           "bend/fold " + std::to_string(fold) + " rest " + std::to_string(rest);
       Vector12d g = Vector12d::Zero();
       Matrix12d h = Matrix12d::Zero();
-      bend_energy(x, rest, K, &g, &h, HessianKind::EXACT);
+      bend_energy(x, rest, rp, K, &g, &h, HessianKind::EXACT);
       auto e = [&](const Eigen::VectorXd& y) {
-        return bend_energy(Vector12d(y), rest, K, nullptr, nullptr);
+        return bend_energy(Vector12d(y), rest, rp, K, nullptr, nullptr);
       };
       expect_gradient_matches(e, x, g, 1e-6, 1e-6, what);
       auto grad = [&](const Eigen::VectorXd& y) {
         Vector12d gy = Vector12d::Zero();
-        bend_energy(Vector12d(y), rest, K, &gy, nullptr);
+        bend_energy(Vector12d(y), rest, rp, K, &gy, nullptr);
         return Eigen::VectorXd(gy);
       };
       expect_jacobian_matches(grad, x, h, 1e-6, 1e-5, what);
       // the condition's own gradient, too (flat hinges have C = 0 and a zero energy gradient)
-      const Condition<12> c = bend_condition(x, rest, false);
-      auto theta = [&](const Eigen::VectorXd& y) {
-        return bend_condition(Vector12d(y), rest, false).c;
+      const Condition<12> c = bend_condition(x, rest, rp, false);
+      EXPECT_NEAR(c.c, 1.25 * (bend_angle(x) - rest), 1e-12) << what;
+      auto cond = [&](const Eigen::VectorXd& y) {
+        return bend_condition(Vector12d(y), rest, rp, false).c;
       };
-      expect_gradient_matches(theta, x, c.grad, 1e-6, 1e-6, what + " ∂θ/∂x");
+      expect_gradient_matches(cond, x, c.grad, 1e-6, 1e-6, what + " ∂C/∂x");
     }
+}
+
+// BW's bend condition θ − θ₀ has a force ∝ 1/‖n‖ as a triangle of the hinge collapses (its
+// normal, and θ, lose their meaning); weighted by the triangles' areas, C_b's energy gradient
+// and Hessian stay bounded and go to zero with the area.
+TEST(SheetKernels, BendForceStaysBoundedAsATriangleCollapses) {
+  const Vector12d x0 = random_hinge(0.8, 7);
+  const double rp = bend_area_product(x0), rest = 0.1;
+  const Eigen::Vector3d x3 = x0.segment<3>(6), x4 = x0.segment<3>(9);
+  const Eigen::Vector3d e = (x4 - x3).normalized();
+  // x1's distance from the edge's line, and its foot on it
+  const Eigen::Vector3d foot = x3 + (x0.segment<3>(0) - x3).dot(e) * e;
+  const double d0 = (x0.segment<3>(0) - foot).norm();
+  double previous_theta_gradient = 0, g1 = 0, h1 = 0;
+  for (double scale : {1.0, 1e-2, 1e-4, 1e-6}) {
+    Vector12d x = x0;  // x1 moved toward the edge: triangle (x1, x3, x4) collapses
+    x.segment<3>(0) = foot + scale * (x0.segment<3>(0) - foot);
+    const std::string what = "x1 at " + std::to_string(scale * d0) + " cm from the edge";
+    Vector12d g = Vector12d::Zero();
+    Matrix12d h = Matrix12d::Zero();
+    const double energy = bend_energy(x, rest, rp, K, &g, &h, HessianKind::EXACT);
+    ASSERT_TRUE(g.allFinite() && h.allFinite()) << what;
+    if (scale == 1) {
+      g1 = g.norm();
+      h1 = h.norm();
+      ASSERT_GT(g1, 0);
+    }
+    // w = scale here: the energy ½ k w² (θ − θ₀)² ≤ ½ k π² scale², the gradient O(scale),
+    // the Hessian bounded
+    EXPECT_LE(energy, 0.5 * K * std::numbers::pi * std::numbers::pi * scale * scale) << what;
+    EXPECT_LE(g.norm(), 10 * g1 * scale) << what;
+    EXPECT_LE(h.norm(), 10 * h1) << what;
+    // while θ's own gradient ‖∂θ/∂x1‖ = ‖e‖/‖n1‖ grows as 1/distance: the weight is what
+    // bounds the force
+    const Eigen::Vector3d x1 = x.segment<3>(0);
+    const double theta_gradient = (x4 - x3).norm() / (x1 - x3).cross(x1 - x4).norm();
+    if (scale < 1) EXPECT_GT(theta_gradient, 50 * previous_theta_gradient) << what;
+    previous_theta_gradient = theta_gradient;
+  }
+  // collapsed (to round-off): no bend energy and no force
+  Vector12d x = x0;
+  x.segment<3>(0) = foot;
+  Vector12d g = Vector12d::Zero();
+  EXPECT_LE(bend_energy(x, rest, rp, K, &g, nullptr), 1e-24);
+  EXPECT_LE(g.norm(), 1e-12);
+}
+
+TEST(SheetKernels, BendConditionRejectsAZeroRestArea) {
+  const Vector12d x = random_hinge(0.3, 1);
+  for (double rp : {0.0, -1.0, std::numeric_limits<double>::quiet_NaN()})
+    EXPECT_THROW(bend_condition(x, 0.0, rp, false), std::invalid_argument) << rp;
 }
 
 TEST(SheetKernels, PsdHessiansArePositiveSemiDefinite) {
@@ -179,7 +234,8 @@ TEST(SheetKernels, PsdHessiansArePositiveSemiDefinite) {
                 -1e-12 * h.norm());
     }
     Matrix12d hb = Matrix12d::Zero();
-    bend_energy(random_hinge(1.0, seed), 0.2, K, nullptr, &hb, HessianKind::PSD);
+    const Vector12d xb = random_hinge(1.0, seed);
+    bend_energy(xb, 0.2, 0.9 * bend_area_product(xb), K, nullptr, &hb, HessianKind::PSD);
     EXPECT_GT(Eigen::SelfAdjointEigenSolver<Matrix12d>(hb).eigenvalues().minCoeff(),
               -1e-12 * hb.norm());
   }

@@ -57,7 +57,7 @@ void check_material(const sheet::SheetMaterial& m) {
 // started; `state` holds the previous solution (a warm start) and ends with this one
 struct StaticSample {
   double force_fixed = 0, force_moving = 0, energy = 0;
-  int iterations = 0;
+  int iterations = 0, factorizations = 0, projected_iterations = 0;
   bool converged = false;
 };
 
@@ -72,11 +72,10 @@ StaticSample solve_at(const KnitSheet& ks, const StretchGeometry& g,
                                                       {"moving", ks.moving_nodes, {0, 0, 0}}};
   sheet::StaticSettings settings;
   settings.gravity.setZero();
-  settings.max_iterations = 2000;  // shear far stiffer than stretch converges slowly (Gauss–Newton)
-  // BW's Gauss–Newton matrix (the default): the projected Newton iteration reaches a bias
-  // pull's wrinkled minimum, but with a soft shear it folds the sheet onto collapsed
-  // triangles past strain 0.4 (docs/core.md), where this one fails less often
-  settings.hessian = sheet::Jacobians::PSD;
+  settings.max_iterations = 2000;
+  // the projected Newton iteration (the default): along the bias the sheet wrinkles, which
+  // BW's Gauss–Newton matrix cannot see (docs/core.md)
+  settings.hessian = sheet::Jacobians::PROJECTED;
   // converged when the free nodes' force is a billionth of the stiffest modulus times the
   // sample's size (dyn) or 1e-8 of where it started: round-off limits stiff sheets
   const double k_max = std::max({material.k_stretch_u, material.k_stretch_v, material.k_shear});
@@ -88,6 +87,8 @@ StaticSample solve_at(const KnitSheet& ks, const StretchGeometry& g,
   s.force_moving = r.reactions[1].dot(g.axis);
   s.energy = r.energy;
   s.iterations = r.iterations;
+  s.factorizations = r.factorizations;
+  s.projected_iterations = r.projected_iterations;
   s.converged = r.converged;
   return s;
 }
@@ -246,7 +247,7 @@ StretchResult stretch_sheet(const std::string& kstate_path, const SheetStretchOp
   result.axis = g.axis;
   result.speed = o.speed;
   sheet::SheetState state = sheet::rest_state(ks.mesh);
-  int newton = 0, failed = 0;
+  int newton = 0, failed = 0, factorizations = 0, projected_iterations = 0;
   StateFile frame = g.file;
   double path = 0;  // strain travelled by the moving clamp so far
   int signal = 0;   // a SIGINT/SIGTERM ends the pull after its sample, with what it has
@@ -257,6 +258,8 @@ StretchResult stretch_sheet(const std::string& kstate_path, const SheetStretchOp
     st.converged = true;
     if (i > 0) st = solve_at(ks, g, so.material, e, state);
     newton += st.iterations;
+    factorizations += st.factorizations;
+    projected_iterations += st.projected_iterations;
     if (!st.converged) ++failed;
     const Eigen::Matrix3Xd yarn = sheet::deform(ks.mesh, emb, state.positions);
     const Eigen::VectorXd q = yarn.reshaped();
@@ -314,6 +317,8 @@ StretchResult stretch_sheet(const std::string& kstate_path, const SheetStretchOp
                       {"material", material_json(so.material)},
                       {"fit", so.fit},
                       {"newton_iterations", newton},
+                      {"projected_iterations", projected_iterations},
+                      {"factorizations", factorizations},
                       {"samples_not_converged", failed},
                       {"embedded_points", emb.size()}};
   summary["stretch"] = stretch_measures(result.curve, o.to_strain, g.separation);

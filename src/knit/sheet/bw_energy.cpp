@@ -57,9 +57,21 @@ T dot(const V3<T>& a, const V3<T>& b) {
   return a.x * b.x + a.y * b.y + a.z * b.z;
 }
 
-// θ = atan2((n1 × n2)·e, ‖e‖ n1·n2) on 4 stacked points (x1, x2, x3, x4)
+// the value of a number or of a Jet
+double value_of(double x) {
+  return x;
+}
+template <int N>
+double value_of(const detail::Jet<N>& x) {
+  return x.v;
+}
+
+double wrap_angle(double a);
+
+// θ = atan2((n1 × n2)·e, ‖e‖ n1·n2) on 4 stacked points (x1, x2, x3, x4); with rest_product
+// > 0 the bend condition C_b = (‖n1‖ ‖n2‖ / rest_product) wrap(θ − rest_angle) instead
 template <class T>
-T bend_angle_t(const V3<T> p[4]) {
+T bend_angle_t(const V3<T> p[4], double rest_angle = 0, double rest_product = 0) {
   using detail::atan2;
   using detail::sqrt;
   using std::atan2;
@@ -69,7 +81,12 @@ T bend_angle_t(const V3<T> p[4]) {
   const V3<T> e = sub(p[3], p[2]);
   const T y = dot(cross(n1, n2), e);
   const T x = sqrt(dot(e, e)) * dot(n1, n2);
-  return atan2(y, x);
+  const T theta = atan2(y, x);
+  if (!(rest_product > 0)) return theta;
+  const double t = value_of(theta);
+  // θ − θ₀ wrapped into (−π, π]: θ plus a constant
+  const T phi = theta + (wrap_angle(t - rest_angle) - t);
+  return (1 / rest_product) * (sqrt(dot(n1, n1) * dot(n2, n2)) * phi);
 }
 
 // wraps an angle difference into (−π, π]
@@ -173,27 +190,51 @@ double bend_angle(const Vector12d& x) {
   return bend_angle_t(p);
 }
 
-Condition<12> bend_condition(const Vector12d& x, double rest_angle, bool hessian) {
+double bend_area_product(const Vector12d& x) {
+  const Vector3d x1 = x.segment<3>(0), x2 = x.segment<3>(3), x3 = x.segment<3>(6),
+                 x4 = x.segment<3>(9);
+  return (x1 - x3).cross(x1 - x4).norm() * (x2 - x4).cross(x2 - x3).norm();
+}
+
+Condition<12> bend_condition(const Vector12d& x, double rest_angle, double rest_product,
+                             bool hessian) {
+  if (!(rest_product > 0) || !std::isfinite(rest_product))
+    throw std::invalid_argument("bend_condition: the rest area product must be positive, got " +
+                                std::to_string(rest_product));
   Condition<12> c;
   const Vector3d x1 = x.segment<3>(0), x2 = x.segment<3>(3), x3 = x.segment<3>(6),
                  x4 = x.segment<3>(9);
   const Vector3d n1 = (x1 - x3).cross(x1 - x4), n2 = (x2 - x4).cross(x2 - x3);
   const Vector3d e = x4 - x3;
   const double le = e.norm(), a1 = n1.squaredNorm(), a2 = n2.squaredNorm();
-  c.c = wrap_angle(std::atan2(n1.cross(n2).dot(e), le * n1.dot(n2)) - rest_angle);
-  if (!(le > 0) || !(a1 > 0) || !(a2 > 0)) return c;  // degenerate: zero gradient
+  // degenerate (a collapsed triangle): the weight, and so C_b and its gradient, are zero
+  if (!(le > 0) || !(a1 > 0) || !(a2 > 0)) return c;
+  const double phi = wrap_angle(std::atan2(n1.cross(n2).dot(e), le * n1.dot(n2)) - rest_angle);
+  const double l1 = std::sqrt(a1), l2 = std::sqrt(a2), w = l1 * l2 / rest_product;
+  c.c = w * phi;
+  // ∂θ/∂x (header comment)
   const Vector3d eh = e / le, m1 = n1 / a1, m2 = n2 / a2;
-  c.grad.segment<3>(0) = -le * m1;
-  c.grad.segment<3>(3) = -le * m2;
-  c.grad.segment<3>(6) = -((x1 - x4).dot(eh) * m1 + (x2 - x4).dot(eh) * m2);
-  c.grad.segment<3>(9) = (x1 - x3).dot(eh) * m1 + (x2 - x3).dot(eh) * m2;
+  Vector12d dtheta;
+  dtheta.segment<3>(0) = -le * m1;
+  dtheta.segment<3>(3) = -le * m2;
+  dtheta.segment<3>(6) = -((x1 - x4).dot(eh) * m1 + (x2 - x4).dot(eh) * m2);
+  dtheta.segment<3>(9) = (x1 - x3).dot(eh) * m1 + (x2 - x3).dot(eh) * m2;
+  // ∂w/∂x from the gradients of the normals' lengths: for a triangle (a, b, c) with
+  // n = (b − a) × (c − a), ∂‖n‖/∂a = n̂ × (c − b), ∂‖n‖/∂b = n̂ × (a − c), ∂‖n‖/∂c = n̂ × (b − a)
+  const Vector3d u1 = n1 / l1, u2 = n2 / l2;  // triangles (x1, x3, x4) and (x2, x4, x3)
+  Vector12d dw;
+  dw.segment<3>(0) = l2 * u1.cross(x4 - x3);
+  dw.segment<3>(3) = l1 * u2.cross(x3 - x4);
+  dw.segment<3>(6) = l2 * u1.cross(x1 - x4) + l1 * u2.cross(x4 - x2);
+  dw.segment<3>(9) = l2 * u1.cross(x3 - x1) + l1 * u2.cross(x2 - x3);
+  c.grad = w * dtheta + (phi / rest_product) * dw;
   if (hessian) {
     using J = detail::Jet<12>;
     V3<J> p[4];
     for (int k = 0; k < 4; ++k)
       p[k] = {J::variable(x[3 * k], 3 * k), J::variable(x[3 * k + 1], 3 * k + 1),
               J::variable(x[3 * k + 2], 3 * k + 2)};
-    c.hess = bend_angle_t(p).h;
+    c.hess = bend_angle_t(p, rest_angle, rest_product).h;
   }
   return c;
 }
@@ -210,10 +251,11 @@ double shear_energy(const Vector9d& x, const Eigen::Matrix2d& dinv, double area,
   return condition_energy(shear_condition(x, dinv, area, hess != nullptr), k, grad, hess, kind);
 }
 
-double bend_energy(const Vector12d& x, double rest_angle, double k, Vector12d* grad,
-                   Matrix12d* hess, HessianKind kind) {
+double bend_energy(const Vector12d& x, double rest_angle, double rest_product, double k,
+                   Vector12d* grad, Matrix12d* hess, HessianKind kind) {
   const bool need_curvature = hess != nullptr && kind == HessianKind::EXACT;
-  return condition_energy(bend_condition(x, rest_angle, need_curvature), k, grad, hess, kind);
+  return condition_energy(bend_condition(x, rest_angle, rest_product, need_curvature), k, grad,
+                          hess, kind);
 }
 
 SheetForces evaluate_forces(const SheetMesh& mesh, const SheetMaterial& material,
@@ -301,7 +343,8 @@ void evaluate_forces(const SheetMesh& mesh, const SheetMaterial& material, const
     const SheetHinge& hg = mesh.hinges[e];
     const int nodes[4] = {hg.opposite[0], hg.opposite[1], hg.edge[0], hg.edge[1]};
     const Vector12d xh = hinge_positions(hg, x), vh = hinge_positions(hg, v);
-    const Condition<12> c = bend_condition(xh, hg.rest_angle, jac && bend_curvature);
+    const Condition<12> c =
+        bend_condition(xh, hg.rest_angle, hg.rest_area_product, jac && bend_curvature);
     Vector12d g = Vector12d::Zero(), f = Vector12d::Zero();
     Matrix12d h = Matrix12d::Zero(), dv = Matrix12d::Zero();
     out.bend_energy += condition_energy(c, material.k_bend, &g, jac ? &h : nullptr, kind);
@@ -345,7 +388,8 @@ double potential_energy(const SheetMesh& mesh, const SheetMaterial& material,
     e += 0.5 * material.k_shear * s * s;
   }
   for (const SheetHinge& hg : mesh.hinges) {
-    const double c = wrap_angle(bend_angle(hinge_positions(hg, x)) - hg.rest_angle);
+    const double c =
+        bend_condition(hinge_positions(hg, x), hg.rest_angle, hg.rest_area_product, false).c;
     e += 0.5 * material.k_bend * c * c;
   }
   for (int i = 0; i < n; ++i) e -= mesh.mass[i] * gravity.dot(x.segment<3>(3 * i));

@@ -9,9 +9,18 @@
 //   C_s = √a (w_u · w_v)                              (cm)
 // Bend (BW §4.4), per interior edge with vertices x1, x2 (opposite) and x3, x4 (edge):
 //   n1 = (x1 − x3) × (x1 − x4),  n2 = (x2 − x4) × (x2 − x3),  e = x4 − x3
-//   θ = atan2((n1 × n2) · e, ‖e‖ n1 · n2),  C_b = θ − θ₀   (radians, wrapped to (−π, π])
+//   θ = atan2((n1 × n2) · e, ‖e‖ n1 · n2)
+//   C_b = w (θ − θ₀),  w = ‖n1‖ ‖n2‖ / (‖n1⁰‖ ‖n2⁰‖)   (radians; θ − θ₀ wrapped to (−π, π])
 // θ is the signed angle between the two triangles' normals: 0 when flat, positive when the
-// sheet folds one way, negative the other.
+// sheet folds one way, negative the other. BW's condition is θ − θ₀; the weight w, the
+// product of the two triangles' areas over their rest areas, is ours: it is 1 in the rest
+// shape and 1 + O(strain) near it, so the bend is BW's wherever the triangles keep their
+// areas, and it goes to zero as either triangle collapses. There θ has no meaning (a
+// collapsed triangle has no normal), ∂θ/∂x grows as 1/‖n‖ and ∂²θ/∂x² as 1/‖n‖², while
+// w ∇θ and w² ∇²θ stay bounded: the bending force and its Hessian have a bound at any
+// configuration. A sheet sheared hard along the bias needs it: past strain √2 − 1 its
+// triangles must stretch or collapse, and a soft-sheared sheet's equilibrium collapses
+// them (docs/core.md).
 //
 // Normalisation. BW scale the stretch and shear conditions by a (C = a(‖w‖ − 1)); then
 // E = ½ k a² ε² per triangle and a uniform strain ε stores ½ k ε² Σ a², which depends on the
@@ -30,8 +39,10 @@
 //   ∂θ/∂x1 = −‖e‖ n1/‖n1‖²,  ∂θ/∂x2 = −‖e‖ n2/‖n2‖²,
 //   ∂θ/∂x3 = −((x1 − x4)·ê n1/‖n1‖² + (x2 − x4)·ê n2/‖n2‖²),
 //   ∂θ/∂x4 =   (x1 − x3)·ê n1/‖n1‖² + (x2 − x3)·ê n2/‖n2‖²       (Bridson et al. 2003)
-// ∂²θ/∂x² is computed exactly by second-order forward-mode differentiation (jet.hpp).
-// Degenerate configurations (‖w‖ = 0, a collapsed bending triangle) get a zero gradient.
+//   ∂C_b/∂x = w ∂θ/∂x + (θ − θ₀) ∂w/∂x, with ∂‖n‖/∂a = n̂ × (c − b) for n = (b − a) × (c − a)
+// ∂²C_b/∂x² is computed exactly by second-order forward-mode differentiation (jet.hpp).
+// Degenerate configurations (‖w‖ = 0; a collapsed bending triangle, where C_b = 0) get a
+// zero gradient.
 //
 // Hessians of E = ½ k C²:
 //   EXACT: k (∇C ∇Cᵀ + C ∇²C)                      — for finite-difference tests and Newton
@@ -96,8 +107,13 @@ Condition<9> shear_condition(const Vector9d& x, const Eigen::Matrix2d& dinv, dou
                              bool hessian);
 /// Signed dihedral angle θ of a hinge, radians in (−π, π]; 0 when flat.
 double bend_angle(const Vector12d& x);
-/// Bend condition C_b = θ − θ₀ (wrapped to (−π, π]); its Hessian is exact (jet.hpp).
-Condition<12> bend_condition(const Vector12d& x, double rest_angle, bool hessian);
+/// ‖n1‖ ‖n2‖ of a hinge (cm⁴): four times the product of its two triangles' areas.
+double bend_area_product(const Vector12d& x);
+/// Bend condition C_b = (‖n1‖ ‖n2‖ / rest_product)(θ − θ₀), θ − θ₀ wrapped to (−π, π]
+/// (header comment); rest_product = bend_area_product in the rest shape (> 0, else
+/// std::invalid_argument). Its Hessian is exact (jet.hpp).
+Condition<12> bend_condition(const Vector12d& x, double rest_angle, double rest_product,
+                             bool hessian);
 
 /// E = ½ k C² (erg); adds ∂E/∂x = k C ∇C into *grad and the chosen Hessian into *hess
 /// (either may be null; *hess needs a condition computed with its Hessian).
@@ -136,8 +152,8 @@ double stretch_energy(const Vector9d& x, const Eigen::Matrix2d& dinv, double are
 double shear_energy(const Vector9d& x, const Eigen::Matrix2d& dinv, double area, double k,
                     Vector9d* grad, Matrix9d* hess, HessianKind kind = HessianKind::EXACT);
 /// Bending energy ½ k C_b² of one hinge (erg); adds its gradient and Hessian.
-double bend_energy(const Vector12d& x, double rest_angle, double k, Vector12d* grad,
-                   Matrix12d* hess, HessianKind kind = HessianKind::EXACT);
+double bend_energy(const Vector12d& x, double rest_angle, double rest_product, double k,
+                   Vector12d* grad, Matrix12d* hess, HessianKind kind = HessianKind::EXACT);
 
 /// Which Jacobians evaluate_forces assembles.
 enum class Jacobians { NONE, PSD, EXACT, PROJECTED };

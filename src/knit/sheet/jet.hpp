@@ -71,6 +71,21 @@ Jet<N> operator*(const Jet<N>& a, const Jet<N>& b) {
   return chain2(a, b, a.v * b.v, b.v, a.v, 0.0, 1.0, 0.0);
 }
 
+// a Jet plus or times a constant
+template <int N>
+Jet<N> operator+(Jet<N> a, double b) {
+  a.v += b;
+  return a;
+}
+
+template <int N>
+Jet<N> operator*(double a, Jet<N> b) {
+  b.v *= a;
+  b.g *= a;
+  b.h *= a;
+  return b;
+}
+
 template <int N>
 Jet<N> sqrt(const Jet<N>& a) {
   const double s = std::sqrt(a.v);

@@ -134,6 +134,10 @@ SheetMesh make_sheet_mesh(Eigen::Matrix3Xd rest, Eigen::Matrix2Xd uv,
     h.edge = {e.first, e.second};
     h.opposite = {sides[0].second, sides[1].second};
     h.rest_angle = bend_angle(hinge_positions(h, x0));
+    h.rest_area_product = bend_area_product(hinge_positions(h, x0));
+    if (!(h.rest_area_product > 0))
+      throw std::invalid_argument("sheet mesh: a triangle at edge (" + std::to_string(e.first) +
+                                  ", " + std::to_string(e.second) + ") has no area");
     mesh.hinges.push_back(h);
   }
   set_density(mesh, density);

@@ -56,6 +56,7 @@ struct SheetHinge {
   std::array<int, 2> edge{};      ///< the shared edge's end nodes
   std::array<int, 2> opposite{};  ///< the node opposite the edge in each triangle
   double rest_angle = 0;          ///< θ₀, radians, the dihedral angle in the rest shape
+  double rest_area_product = 1;  ///< ‖n1⁰‖ ‖n2⁰‖, cm⁴ (bend_area_product in the rest shape)
 };
 
 /// Immutable sheet model: rest shape, material coordinates and lumped masses. Build it with

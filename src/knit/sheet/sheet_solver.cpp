@@ -315,6 +315,7 @@ StaticReport solve_static(const SheetMesh& mesh, const SheetMaterial& material,
       setup_block();
       block->fill(f.dfdx, -1, 0);
       ldlt.factorize(block->matrix);
+      ++report.factorizations;
       if (ldlt.info() != Eigen::Success) break;  // singular: stability unknown
       Eigen::Index i = 0;
       if (ldlt.vectorD().minCoeff(&i) > 0) {
@@ -363,6 +364,7 @@ StaticReport solve_static(const SheetMesh& mesh, const SheetMaterial& material,
     auto try_step = [&](const Eigen::SparseMatrix<double>& dfdx, double mu) {
       block->fill(dfdx, -1, mu);
       ldlt.factorize(block->matrix);
+      ++report.factorizations;
       if (ldlt.info() != Eigen::Success) return false;
       d = ldlt.solve(ff);
       return d.allFinite() && d.dot(ff) > 0 && (ldlt.vectorD().array() > 0).all();
@@ -388,6 +390,7 @@ StaticReport solve_static(const SheetMesh& mesh, const SheetMaterial& material,
       if (projected) {
         evaluate_forces(mesh, material, x, zero_v, g, Jacobians::PROJECTED, fp);
         h = &fp.dfdx;
+        ++report.projected_iterations;
       }
       block->fill(*h, -1, 0);
       const double diag = block->matrix.diagonal().cwiseAbs().maxCoeff();

@@ -81,13 +81,13 @@ struct StaticSettings {
   int max_iterations = 100;                               ///< Newton iterations
   double force_tolerance = 1e-9;      ///< converged when max |f| on a free DOF ≤ this, dyn …
   double relative_tolerance = 1e-10;  ///< … or ≤ this × its value at the start
-  /// The Newton matrix. PROJECTED: the exact Hessian where it is positive definite, shifted
-  /// on its diagonal (up to 1e-3 of it) or each element's projected onto the PSD matrices
-  /// where not, with the saddle check below: it reaches the wrinkled minimum of a bias pull,
-  /// which PSD (BW's Gauss–Newton shear and bend, no check) stops short of or creeps
-  /// toward; but with a soft shear it folds the sheet onto collapsed triangles, where the
-  /// bend force has no bound (docs/core.md), so PSD stays the default. Not NONE or EXACT.
-  Jacobians hessian = Jacobians::PSD;
+  /// The Newton matrix. PROJECTED (the default): the exact Hessian where it is positive
+  /// definite, shifted on its diagonal (up to 1e-3 of it) or each element's projected onto
+  /// the PSD matrices where not, with the saddle check below: it reaches a bias pull's
+  /// wrinkled minimum, which PSD (BW's Gauss–Newton shear and bend, no check) stops short of
+  /// or creeps toward. PSD: Gauss–Newton, cheaper per iteration, for sheets that stay
+  /// near flat (docs/core.md). Not NONE or EXACT.
+  Jacobians hessian = Jacobians::PROJECTED;
   /// PROJECTED: how many times a solve may leave a saddle it converged to (below)
   int max_escapes = 20;
 };
@@ -100,6 +100,8 @@ struct StaticReport {
   bool stable = false;
   int escapes = 0;                         ///< saddles left along negative curvature
   int iterations = 0;                      ///< Newton iterations
+  int factorizations = 0;                  ///< sparse LDLᵀ factorisations (the solve's cost)
+  int projected_iterations = 0;            ///< PROJECTED: iterations on the projected matrix
   double residual = 0;                     ///< max |f| over free DOFs at the end, dyn
   double energy = 0;                       ///< potential energy at the end, erg
   std::vector<Eigen::Vector3d> reactions;  ///< per constraint, dyn, clamp on sheet (−Σ f)
