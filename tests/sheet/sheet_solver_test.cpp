@@ -20,6 +20,18 @@
 namespace knit::sheet {
 namespace {
 
+// clamps on the 2 × 2 nodes at opposite corners of a 9 × 9-node square: a bias pull
+std::vector<SheetConstraint> diagonal_clamps(const SheetMesh& mesh) {
+  auto corner = [&](int i0, int j0) {
+    std::vector<int> nodes;
+    for (int j = j0; j < j0 + 2; ++j)
+      for (int i = i0; i < i0 + 2; ++i) nodes.push_back(j * mesh.nu + i);
+    return nodes;
+  };
+  return {{"fixed", corner(0, 0), Eigen::Vector3d::Zero()},
+          {"moving", corner(7, 7), Eigen::Vector3d::Zero()}};
+}
+
 double max_edge_strain(const SheetMesh& mesh, const Eigen::VectorXd& x) {
   double m = 0;
   for (const auto& t : mesh.triangles)
@@ -111,15 +123,8 @@ TEST(SheetStatics, BiasPullWrinklesToAStableMinimumBelowTheFlatSaddle) {
   mat.k_stretch_u = 3e3;  // dyn/cm: shear as stiff as stretch, as the 42×32 knits' fit asks
   mat.k_stretch_v = 3e3;
   mat.k_shear = 3e3;
-  mat.k_bend = 1e-2;                   // erg: a thin sheet
-  auto corner = [&](int i0, int j0) {  // a 2 × 2 block of nodes at a corner
-    std::vector<int> nodes;
-    for (int j = j0; j < j0 + 2; ++j)
-      for (int i = i0; i < i0 + 2; ++i) nodes.push_back(j * mesh.nu + i);
-    return nodes;
-  };
-  const std::vector<SheetConstraint> clamps = {{"fixed", corner(0, 0), Eigen::Vector3d::Zero()},
-                                               {"moving", corner(7, 7), Eigen::Vector3d::Zero()}};
+  mat.k_bend = 1e-2;  // erg: a thin sheet
+  const std::vector<SheetConstraint> clamps = diagonal_clamps(mesh);
   std::vector<bool> held(mesh.num_nodes(), false);
   for (const SheetConstraint& c : clamps)
     for (int n : c.nodes) held[n] = true;
@@ -210,14 +215,7 @@ TEST(SheetStatics, SoftShearedBiasPullConvergesPastTriangleCollapse) {
   mat.k_stretch_v = 1493;
   mat.k_shear = 71;
   mat.k_bend = 1.0;  // erg, the stretch recipe's default
-  auto corner = [&](int i0, int j0) {
-    std::vector<int> nodes;
-    for (int j = j0; j < j0 + 2; ++j)
-      for (int i = i0; i < i0 + 2; ++i) nodes.push_back(j * mesh.nu + i);
-    return nodes;
-  };
-  const std::vector<SheetConstraint> clamps = {{"fixed", corner(0, 0), Eigen::Vector3d::Zero()},
-                                               {"moving", corner(7, 7), Eigen::Vector3d::Zero()}};
+  const std::vector<SheetConstraint> clamps = diagonal_clamps(mesh);
   const Eigen::Vector3d axis = Eigen::Vector3d(1, 1, 0).normalized();
   const double separation = (mesh.rest.col(7 * mesh.nu + 7) - mesh.rest.col(0)).norm();
   const Eigen::VectorXd rest = mesh.rest_positions();
