@@ -434,6 +434,14 @@ TEST(SheetMeshes, BadInputThrowsNamingTheParameter) {
   expect_throw([&] { make_rectangle(o, ex, ey, 1.0, 1.0, 3, 1); }, "nv");
   expect_throw([&] { make_rectangle(o, ex, ex, 1.0, 1.0, 3, 3); }, "parallel");
   expect_throw([&] { make_rectangle(o, ex, ey, 1.0, 1.0, 3, 3, 0.0); }, "density");
+  // a triangle with material area but none in 3-D: its bend has no rest normal
+  {
+    Eigen::Matrix3Xd rest(3, 4);
+    rest << 0, 1, 0, 0.5, 0, 0, 1, 0.5, 0, 0, 0, 0;  // node 3 halfway between nodes 1 and 2
+    Eigen::Matrix2Xd uv(2, 4);
+    uv << 0, 1, 0, 1, 0, 0, 1, 1;
+    expect_throw([&] { make_sheet_mesh(rest, uv, {{0, 1, 2}, {1, 3, 2}}); }, "has no area");
+  }
   const SheetMesh mesh = make_rectangle(o, ex, ey, 1.0, 1.0, 3, 3);
   expect_throw([&] { evaluate_forces(mesh, {}, Eigen::VectorXd(5), Eigen::VectorXd(27)); },
                "positions");

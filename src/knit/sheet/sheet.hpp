@@ -94,7 +94,8 @@ struct SheetMesh {
 /// triangles; computes D⁻¹, areas, hinges (edges shared by exactly two triangles, their
 /// rest angles from the rest positions) and lumped masses with `density` (g/cm²).
 /// Throws std::invalid_argument for mismatched sizes, out-of-range indices, triangles of
-/// (near-)zero material area, edges shared by more than two triangles or density <= 0.
+/// (near-)zero material area or zero rest area in 3-D at a bending edge, edges shared by
+/// more than two triangles or density <= 0.
 SheetMesh make_sheet_mesh(Eigen::Matrix3Xd rest, Eigen::Matrix2Xd uv,
                           std::vector<std::array<int, 3>> triangles,
                           double density = DEFAULT_SHEET_DENSITY);
