@@ -185,12 +185,14 @@ std::vector<int> StiffSolver::forward_columns(RowMajorMatrix& X, const std::vect
 void StiffSolver::backward(Eigen::VectorXd& x) const {
   const double* a = m_band.data();
   const double* inv = m_inv_pivot.data();
-  // Lᵀ x = y
+  // Lᵀ x = y, each row's sum taken from its farthest coordinate in: x[j + 1], found just
+  // before, enters last, so one multiply-add and the pivot's product lie between one
+  // coordinate and the next (summed nearest first, all eleven lay on that chain)
   for (int j = m_n - 1; j >= 0; --j) {
     const double* col = a + static_cast<size_t>(j) * W;
     const int m = std::min(BAND, m_n - 1 - j);
     double s = x[j];
-    for (int r = 1; r <= m; ++r) s -= col[r] * x[j + r];
+    for (int r = m; r >= 1; --r) s -= col[r] * x[j + r];
     x[j] = s * inv[j];
   }
 }
