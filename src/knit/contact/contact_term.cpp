@@ -181,6 +181,7 @@ double ContactTerm::add_force_linearised(const Model& model, const Eigen::Vector
     force += m_lin_force;
     return m_lin_energy;
   }
+  flatten(model);
   const double kdt = model.params.material.k_dt;
   const double kdiff = model.params.material.k_dt - model.params.material.k_dn;
   // the stiffness product K v for the step's right-hand side, formed on the way: K v₀ came
@@ -700,7 +701,7 @@ double ContactTerm::add_force_bvh(const Model& model, const Eigen::VectorXd& q,
   // per-segment sums in a fixed order: own pairs (i, j > i), then pairs (k < i, i) in
   // ascending k
   t = Clock::now();
-  index_incoming_pairs(model, n);
+  index_incoming_pairs(n);
   const double energy = m_accumulator.run(model, [&](int s, Vector12d& slot) {
     for (const PairForce& pf : m_pairs[s]) slot += pf.force_i;
     for (int q = m_incoming_offset[s]; q < m_incoming_offset[s + 1]; ++q)
@@ -739,7 +740,7 @@ double ContactTerm::add_force_bvh(const Model& model, const Eigen::VectorXd& q,
   return energy;
 }
 
-void ContactTerm::index_incoming_pairs(const Model& model, int n) {
+void ContactTerm::index_incoming_pairs(int n) {
   // a counting sort of the pairs (k, index) by their j, visited in ascending k: each
   // segment's incoming pairs come out in ascending row
   m_incoming_offset.assign(n + 1, 0);
@@ -757,7 +758,17 @@ void ContactTerm::index_incoming_pairs(const Model& model, int n) {
   m_stiff_offset[0] = 0;
   for (int i = 0; i < n; ++i)
     m_stiff_offset[i + 1] = m_stiff_offset[i] + static_cast<int>(m_row_stiff[i].size());
-  // ... and copied to one array in that order, with what the products read per pair
+  // the flat arrays are built when first read (flatten): an evaluation that the next
+  // one replaces before any product or linearised step (every step while the knit
+  // moves fast) never needs them
+  m_flat_valid = false;
+}
+
+void ContactTerm::flatten(const Model& model) const {
+  if (m_flat_valid || !m_stiffness) return;
+  const int n = static_cast<int>(m_stiff_offset.size()) - 1;
+  if (n < 0) return;
+  // the rows' point pairs copied to one array in order, with what the products read per pair
   const QuadratureTable& quad = model.contact_quad;
   m_flat.resize(m_stiff_offset[n]);
   tbb::parallel_for(tbb::blocked_range<int>(0, n, 64), [&](const tbb::blocked_range<int>& r) {
@@ -795,6 +806,7 @@ void ContactTerm::index_incoming_pairs(const Model& model, int n) {
       }
     }
   });
+  m_flat_valid = true;
 }
 
 void ContactTerm::set_operator_stiffness(bool on) {
@@ -811,6 +823,7 @@ void ContactTerm::set_operator_stiffness(bool on) {
     m_flat.clear();
     m_in_points.clear();
     m_in_offset.clear();
+    m_flat_valid = false;
   }
 }
 
@@ -855,6 +868,7 @@ void ContactTerm::add_stiffness_product(const Model& model, const Eigen::VectorX
     y += m_kv;  // x is the velocity of the last evaluation: its kernels formed K x
     return;
   }
+  flatten(model);
   m_stiff_product.resize(m_stiff_offset[rows]);
   // per point pair its force (pair_product), then per segment their sum (segment_product)
   tbb::parallel_for(tbb::blocked_range<int>(0, m_stiff_offset[rows], 256),
@@ -878,7 +892,8 @@ void ContactTerm::add_stiffness_product_rows(const Model& model, const Eigen::Ve
                                              Eigen::VectorXd& y) const {
   if (!m_stiffness) return;
   const int rows = std::min<int>(m_num_seg, static_cast<int>(m_stiff_offset.size()) - 1);
-  if (rows <= 0) return;
+  if (rows <= 0 || segments.empty()) return;
+  flatten(model);
   // as add_stiffness_product, each listed segment's pairs taken afresh (a few segments)
   auto force = [&](int k) { return pair_product(m_flat[k], x.data()); };
   for (int s : segments) {

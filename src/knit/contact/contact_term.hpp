@@ -242,9 +242,12 @@ class ContactTerm : public Term {
   // segment s's operator block as its 10 upper 3×3 blocks (u, v ≥ u in order; each
   // symmetric, xx xy xz yy yz zz); false where it is zero
   bool operator_block_upper(int s, double (*upper)[6]) const;
-  // m_incoming from the kernels' pairs (rows 0 … n − 1), and with m_stiffness the point
-  // pairs flattened (m_flat, m_in_points)
-  void index_incoming_pairs(const Model& model, int n);
+  // m_incoming from the kernels' pairs (rows 0 … n − 1), and with m_stiffness the rows'
+  // point pairs numbered (m_stiff_offset)
+  void index_incoming_pairs(int n);
+  // with m_stiffness, the last evaluation's point pairs flattened (m_flat, m_in_points),
+  // once per evaluation, by the first reader
+  void flatten(const Model& model) const;
   // the stiffness product's force of point pair p, H (J x), from x at its segments' control
   // points (p.ci, p.cj)
   Eigen::Vector3d pair_product(const FlatPair& p, const double* x) const;
@@ -311,9 +314,10 @@ class ContactTerm : public Term {
   // linearisation run over these flat arrays: a knit's rows hold a few point pairs each,
   // and reading them row by row from their own vectors was mostly waiting for memory
   std::vector<int> m_stiff_offset;
-  std::vector<FlatPair> m_flat;
-  std::vector<IncomingPoint> m_in_points;
-  std::vector<int> m_in_offset;
+  mutable std::vector<FlatPair> m_flat;
+  mutable std::vector<IncomingPoint> m_in_points;
+  mutable std::vector<int> m_in_offset;
+  mutable bool m_flat_valid = false;  // m_flat, m_in_points describe the last evaluation
   mutable std::vector<Eigen::Vector3d> m_stiff_product;  // per point pair: H (J x) (dyn)
   std::vector<RowStats> m_rows;
   std::vector<std::vector<ContactPointPair>> m_row_records;
