@@ -53,6 +53,7 @@ class BendingEnergy final : public Term {
   double add_force(const Model& model, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
                    double time, Eigen::VectorXd& force) override;
   bool has_stiffness() const override { return m_implicit; }
+  bool reads_velocity() const override { return false; }
   void segment_stiffness(const Model& model, const Eigen::VectorXd& q,
                          std::vector<Matrix12d>& blocks) override;
 

@@ -10,6 +10,7 @@ class Gravity final : public Term {
   double add_force(const Model& model, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
                    double time, Eigen::VectorXd& force) override;
   double energy(const Model& model, const Eigen::VectorXd& q, double time) override;
+  bool reads_velocity() const override { return false; }
 };
 
 }  // namespace knit

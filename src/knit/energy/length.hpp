@@ -43,6 +43,7 @@ class LengthEnergy final : public Term {
   /// The PROJECTED stiffness of every segment (length_hessian): the linearly implicit
   /// integrator takes this term implicitly.
   bool has_stiffness() const override { return true; }
+  bool reads_velocity() const override { return false; }
   void segment_stiffness(const Model& model, const Eigen::VectorXd& q,
                          std::vector<Matrix12d>& blocks) override;
 

@@ -34,6 +34,10 @@ class Term {
   /// True for a term the IMEX integrator takes implicitly: it gives segment_stiffness.
   /// Its force must depend on q alone (not on v or time).
   virtual bool has_stiffness() const { return false; }
+  /// False for a term whose force does not read the velocities v and that records nothing
+  /// beyond its energy (bending, gravity, length): the IMEX step needs such an explicit
+  /// term at its midpoint alone, not at its start (Simulator::set_lean_records).
+  virtual bool reads_velocity() const { return true; }
   /// Where has_stiffness: its stiffness K ≈ ∂²E/∂q² at q as one positive-semidefinite
   /// 12×12 block per segment (over the segment's four control points; blocks[i] for
   /// segment i; resized here).

@@ -333,6 +333,7 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
   bool printed_progress = false;
 
   auto write_output = [&](bool frame) {
+    sim.forward(state);  // whole records (the steps' own are lean: below)
     if (opt.before_output) opt.before_output(sim, state);
     const double wall = seconds_since(last_output);
     const long long dsteps = report.steps - last_output_step;
@@ -391,6 +392,14 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
   bool stopped_early = false;
   int signal = 0;
   HalvingStepper stepper(model.params.solver.max_step_halvings, opt.halving_calm_steps);
+  // the loop reads whole records at its outputs alone: the steps may leave out what only
+  // records read (Simulator::set_lean_records), as they were once the loop ends
+  struct LeanRecords {
+    Simulator& sim;
+    bool was;
+    ~LeanRecords() { sim.set_lean_records(was); }
+  } lean{sim, sim.lean_records()};
+  sim.set_lean_records(true);
   while (report.status == StepStatus::OK) {
     const double hs = next_step_length(state.time, end_time, h);
     if (hs == 0) break;
@@ -473,6 +482,7 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
   }
 
   // data describes `state`: a failed step leaves both as they were before it
+  sim.forward(state);  // (whole records)
   nlohmann::json s;
   s["status"] = status_word(report.status);
   if (!report.message.empty()) s["message"] = report.message;

@@ -227,13 +227,29 @@ bool same_bits(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
 }  // namespace
 
 void Simulator::forward(const State& state) {
-  forward(state, std::numeric_limits<double>::quiet_NaN());
+  forward(state, std::numeric_limits<double>::quiet_NaN(), false);
 }
 
-void Simulator::forward(const State& state, double known_violation) {
+bool Simulator::can_leave_out_explicit() const {
+  if (!is_imex(m_model.params.solver.integrator)) return false;
+  // a step with a stiffness block solves for v⁺; without one it moves q by the midpoint's
+  // velocity, which needs every force at the start
+  bool any_stiffness = false;
+  for (const auto& term : m_terms) {
+    any_stiffness = any_stiffness || term->has_stiffness();
+    if (!implicit(*term) && term->reads_velocity()) return false;
+  }
+  return any_stiffness;
+}
+
+void Simulator::forward(const State& state, double known_violation, bool lean) {
   if (m_cached && state.time == m_cache_time && same_bits(state.q, m_cache_q) &&
-      same_bits(state.v, m_cache_v))
+      same_bits(state.v, m_cache_v)) {
+    if (!lean && !m_left_out.empty()) complete_records(state);
     return;
+  }
+  lean = lean && can_leave_out_explicit();
+  m_left_out.clear();
   // the same evaluation as compute_forces, term by term into one vector (so the force is
   // bitwise the one a step's first evaluation gives), recording each term's share
   m_force0.setZero(state.q.size());
@@ -256,9 +272,18 @@ void Simulator::forward(const State& state, double known_violation) {
   // with the IMEX integrator the implicit terms' force at q is also kept on its own
   const bool imex = is_imex(m_model.params.solver.integrator);
   if (imex) m_force_implicit.setZero(state.q.size());
+  constexpr double NaN = std::numeric_limits<double>::quiet_NaN();
   for (size_t t = 0; t < m_terms.size(); ++t) {
     Term& term = *m_terms[t];
     TermRecord& rec = m_data.terms[t];
+    rec.name = std::string(term.name());
+    if (lean && !implicit(term)) {
+      // the step takes it at its midpoint alone: left for complete_records
+      rec.energy = NaN;
+      rec.net_force = Eigen::Vector3d::Constant(NaN);
+      m_left_out.push_back(t);
+      continue;
+    }
     {
       ScopedTimer timer(m_data.stage_seconds[std::string(term.name())]);
       if (imex && implicit(term)) {
@@ -272,20 +297,41 @@ void Simulator::forward(const State& state, double known_violation) {
     }
     ScopedTimer timer(m_data.stage_seconds["record"]);
     e += rec.energy;
-    rec.name = std::string(term.name());
     const Eigen::Vector3d after = net_force(m_force0);
     rec.net_force = after - before;
     before = after;
     term.record(m_data);
   }
   m_data.time = state.time;
-  m_data.potential_energy = e;
+  m_recorded_energy = e;
+  m_data.potential_energy = m_left_out.empty() ? e : NaN;
   m_data.kinetic_energy = kinetic_energy(state);
   m_data.max_violation = std::isnan(known_violation) ? max_violation(state) : known_violation;
   m_cache_q = state.q;
   m_cache_v = state.v;
   m_cache_time = state.time;
   m_cached = true;
+}
+
+void Simulator::complete_records(const State& state) {
+  double e = m_recorded_energy;
+  for (size_t t : m_left_out) {
+    Term& term = *m_terms[t];
+    TermRecord& rec = m_data.terms[t];
+    {
+      ScopedTimer timer(m_data.stage_seconds[std::string(term.name())]);
+      m_force_term.setZero(state.q.size());
+      rec.energy = term.add_force(m_model, state.q, state.v, state.time, m_force_term);
+    }
+    ScopedTimer timer(m_data.stage_seconds["record"]);
+    m_force0 += m_force_term;
+    rec.net_force = net_force(m_force_term);
+    e += rec.energy;
+    term.record(m_data);
+  }
+  m_left_out.clear();
+  m_recorded_energy = e;
+  m_data.potential_energy = e;
 }
 
 void Simulator::unconstrained_step(const State& s, double h, Eigen::VectorXd& q_out,
@@ -302,7 +348,9 @@ void Simulator::unconstrained_step(const State& s, double h, Eigen::VectorXd& q_
 bool Simulator::imex_step(const State& s, double h, Eigen::VectorXd& q_out,
                           Eigen::VectorXd& v_out) {
   const Eigen::VectorXd& inv_m = m_model.inv_mass3;
-  forward(s);  // every term's force at (q, v), recorded; the implicit terms' also on its own
+  // every term's force at (q, v), recorded (the explicit ones only where the records need
+  // them: set_lean_records); the implicit terms' also on its own
+  forward(s, std::numeric_limits<double>::quiet_NaN(), m_lean);
   // with contact reuse and no length rows, the matrix M + h² K (its stiffness blocks, its
   // factor, the glues' W and S) is kept while every control point stays within the reuse
   // distance of where it was formed: linearly implicit Euler with a lagged Jacobian, the
@@ -827,7 +875,8 @@ StepResult Simulator::step(State& state, double h) {
   // ended by evaluating C at exactly these positions and time, so max |C| is known
   // the projection ended by evaluating C at exactly these positions and time, unless a
   // filter moved them since
-  forward(state, moved ? std::numeric_limits<double>::quiet_NaN() : res.projection.max_violation);
+  forward(state, moved ? std::numeric_limits<double>::quiet_NaN() : res.projection.max_violation,
+          m_lean);
   for (const auto& f : m_filters) f->record(m_data);
   if (m_data.contact.present && m_data.contact.min_distance_ratio < 0.5) {
     std::ostringstream msg;

@@ -73,6 +73,15 @@ class Simulator {
   /// forces, contact set, kinetic energy, max |C|). Does nothing when data() already
   /// describes exactly this state (same q, v and time, bitwise).
   void forward(const State& state);
+  /// With `on`, a step's closing forward (the next step's first evaluation) leaves out what
+  /// only the records read, where the IMEX step does not need it: the explicit terms, when
+  /// none of them reads the velocities (Term::reads_velocity: the step evaluates them at its
+  /// midpoint alone) and some term is implicit. Their energies and net forces in data(),
+  /// and the potential energy, are then NaN until forward(state) completes them (those terms
+  /// alone, evaluated at the state). Steps are the same to the bit either way. For a
+  /// caller that reads whole records only now and then (the runner, at its outputs).
+  void set_lean_records(bool on) { m_lean = on; }
+  bool lean_records() const { return m_lean; }
   /// What the last forward and step recorded (see step_data.hpp).
   const StepData& data() const { return m_data; }
   /// Clears the stage timings in data().
@@ -134,7 +143,11 @@ class Simulator {
   }
 
  private:
-  void forward(const State& state, double known_violation);
+  void forward(const State& state, double known_violation, bool lean);
+  // whether a lean forward may leave out the explicit terms (set_lean_records)
+  bool can_leave_out_explicit() const;
+  // evaluates and records the terms a lean forward left out, at `state`
+  void complete_records(const State& state);
   Model m_model;
   std::vector<std::unique_ptr<Term>> m_terms;
   std::vector<std::unique_ptr<VelocityFilter>> m_filters;
@@ -142,6 +155,10 @@ class Simulator {
   StepData m_data;
   // the state data() describes, and the force there (reused as a step's first evaluation)
   bool m_cached = false;
+  bool m_lean = false;
+  // the terms (indices) the cached forward left out, and the energy of the others
+  std::vector<size_t> m_left_out;
+  double m_recorded_energy = 0;
   Eigen::VectorXd m_cache_q, m_cache_v, m_force0;
   double m_cache_time = 0;
   Eigen::VectorXd m_force, m_qmid, m_vmid, m_qnew, m_vnew, m_qpre;
