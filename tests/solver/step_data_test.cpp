@@ -2,8 +2,11 @@
 // evaluating anything, and the contact set agrees with the contact term's point pairs.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <set>
+#include <sstream>
 
 #include "knit/contact/contact_term.hpp"
 #include "knit/recipes/relax_knit.hpp"
@@ -56,6 +59,62 @@ TEST(StepData, LoggingEveryStepEvaluatesNothing) {
   // one evaluation at the start, then two per step (the second of each step's pair is at
   // its result, reused by the next step)
   EXPECT_EQ(evaluations[0], 1 + 2 * 60);
+}
+
+// A run whose steps keep lean records (the runner's setting with the IMEX step and no
+// explicit term that reads the velocities: Simulator::set_lean_records) still logs whole
+// ones: every row's energies finite, the potential energy their sum; the simulator's
+// setting is as before once the run ends, and its records whole.
+TEST(StepData, LeanStepsLogWholeRecords) {
+  RelaxKnitOptions o;
+  o.knit.rows = 6;
+  o.knit.cols = 6;
+  o.params.solver.integrator = Integrator::IMEX_CONTACT;
+  o.params.solver.contact_reuse = 0.05;
+  o.params.solver.time_step = 6e-4;
+  o.params.material.k_global = 0;
+  KnitRelaxation setup = setup_knit_relaxation("stockinette", o);
+  Simulator& sim = *setup.sim;
+  RunOptions r;
+  r.duration = 30 * 6e-4;
+  r.output_every = 7;
+  r.out_dir = (std::filesystem::path(::testing::TempDir()) / "step_data_lean").string();
+  std::filesystem::remove_all(r.out_dir);
+  r.progress = false;
+  ASSERT_FALSE(sim.lean_records());
+  const RunReport report = run_simulation(sim, setup.state, r);
+  ASSERT_EQ(report.status, StepStatus::OK) << report.message;
+  EXPECT_FALSE(sim.lean_records());
+  EXPECT_TRUE(std::isfinite(sim.data().potential_energy));
+  std::ifstream log(std::filesystem::path(r.out_dir) / "log.csv");
+  std::string line;
+  ASSERT_TRUE(std::getline(log, line));
+  auto split = [](const std::string& text) {
+    std::vector<std::string> cells;
+    std::stringstream in(text);
+    for (std::string cell; std::getline(in, cell, ',');) cells.push_back(cell);
+    return cells;
+  };
+  const std::vector<std::string> header = split(line);
+  int rows = 0;
+  while (std::getline(log, line)) {
+    const std::vector<std::string> cells = split(line);
+    ASSERT_EQ(cells.size(), header.size());
+    double potential = 0, sum = 0;
+    bool bending = false;
+    for (size_t c = 0; c < header.size(); ++c) {
+      if (header[c] == "potential_energy") potential = std::stod(cells[c]);
+      if (header[c].rfind("energy_", 0) != 0) continue;
+      const double e = std::stod(cells[c]);
+      EXPECT_TRUE(std::isfinite(e)) << header[c] << " in row " << rows;
+      sum += e;
+      bending = bending || header[c] == "energy_bending";
+    }
+    EXPECT_TRUE(bending);
+    EXPECT_NEAR(potential, sum, 1e-8 * std::abs(sum)) << "row " << rows;
+    ++rows;
+  }
+  EXPECT_EQ(rows, 1 + 30 / 7 + 1);  // the start, every 7th step, the last
 }
 
 TEST(StepData, RecordsWhatAFreshEvaluationFinds) {
