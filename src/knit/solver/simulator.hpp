@@ -71,7 +71,8 @@ class Simulator {
   StepResult step(State& state, double h);
   /// Evaluates the forces at `state` and records them in data() (energies, per-term net
   /// forces, contact set, kinetic energy, max |C|). Does nothing when data() already
-  /// describes exactly this state (same q, v and time, bitwise).
+  /// describes exactly this state (same q, v and time, bitwise), beyond completing what a
+  /// lean step left out there (set_lean_records).
   void forward(const State& state);
   /// With `on`, a step's closing forward (the next step's first evaluation) leaves out what
   /// only the records read, where the IMEX step does not need it: the explicit terms, when
