@@ -755,6 +755,37 @@ TEST(ContactTerm, ReusedLinearisationIsSecondOrderAccurate) {
   EXPECT_EQ(term.evaluations(), 3);
 }
 
+// The reuse distance scales with set_reuse_scale (Simulator::set_reuse_scale): a move of
+// 1.5 ρ r is beyond reach at scale 1, within it at 2, and beyond it again at 1.
+TEST(ContactTerm, ReuseScaleWidensTheReach) {
+  Params p;
+  p.solver.integrator = Integrator::IMEX_CONTACT;
+  p.solver.contact_reuse = 0.5;
+  const Sample s = make(knit_like_sample(2, 2, 8, 0.125, 0.8), p);
+  const Model& m = s.model;
+  const double reach = 0.5 * m.params.material.radius;
+  const int n = static_cast<int>(s.q.size());
+  const Eigen::VectorXd v0 = Eigen::VectorXd::Zero(n);
+  Eigen::VectorXd dq = random_vector(n, 1.0, 31);
+  double largest = 0;
+  for (int k = 0; k < n; k += 3) largest = std::max(largest, dq.segment<3>(k).norm());
+  dq *= 1.5 * reach / largest;  // the largest control point's move is 1.5 ρ r
+  auto linearised = [&](double scale) {
+    ContactTerm term(m);
+    term.set_operator_stiffness(true);
+    term.set_reuse_scale(scale);
+    Eigen::VectorXd f = Eigen::VectorXd::Zero(n);
+    term.add_force(m, s.q, v0, 0.0, f);
+    EXPECT_FALSE(term.last_stats().linearised);
+    term.add_force(m, s.q + dq, v0, 0.0, f);
+    return term.last_stats().linearised;
+  };
+  EXPECT_FALSE(linearised(1.0));
+  EXPECT_TRUE(linearised(2.0));
+  EXPECT_FALSE(linearised(1.4));
+  EXPECT_TRUE(linearised(1.6));
+}
+
 // Reuse needs the stiffness that only the imex-contact integrator keeps.
 TEST(ContactTerm, ReuseRejectsIntegratorsWithoutTheContactStiffness) {
   Params p;

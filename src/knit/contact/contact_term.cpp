@@ -116,7 +116,8 @@ double ContactTerm::add_force(const Model& model, const Eigen::VectorXd& q,
   assert(q.size() == model.num_dof() && force.size() == q.size());
   if (model.num_seg() != m_num_seg || model.contact_quad.size() != m_points) resize(model);
   const auto t0 = Clock::now();
-  const double reuse = model.params.solver.contact_reuse * model.params.material.radius;
+  const double reuse =
+      m_reuse_scale * model.params.solver.contact_reuse * model.params.material.radius;
   const bool reusing = reuse > 0 && m_stiffness && m_culling == ContactCulling::BVH;
   if (reusing && m_lin_valid && m_lin_model == &model && m_lin_q.size() == q.size()) {
     // within reach of the last exact evaluation? (the largest control point's move)

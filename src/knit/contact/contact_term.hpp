@@ -132,6 +132,8 @@ class ContactTerm : public Term {
   double add_force(const Model& model, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
                    double time, Eigen::VectorXd& force) override;
   void refresh() override { m_lin_valid = false; }
+  /// The reuse distance becomes `scale` ρ r (Simulator::set_reuse_scale; 1 at first).
+  void set_reuse_scale(double scale) override { m_reuse_scale = scale; }
   /// Evaluations that reused a linearisation (not counted in evaluations()).
   long long linearised_evaluations() const { return m_linearised; }
 
@@ -341,6 +343,7 @@ class ContactTerm : public Term {
   // reuse: the last exact evaluation's state, force and energy (add_force), the change
   // from it, and per point pair (numbered as m_stiff_offset) the model's force change
   bool m_lin_valid = false;
+  double m_reuse_scale = 1;  // set_reuse_scale
   const Model* m_lin_model = nullptr;
   Eigen::VectorXd m_lin_q, m_lin_v, m_lin_force, m_lin_dq, m_lin_dv, m_lin_kv0;
   bool m_lin_kv_valid = false;  // m_lin_kv0 = K v₀ (the kernels formed it)

@@ -28,6 +28,10 @@ class Term {
   /// model of its force (ContactTerm with SolverSettings::contact_reuse) does not reuse
   /// it. The simulator calls it where a force must be exact (the force residual).
   virtual void refresh() {}
+  /// Scales the distance within which the term reuses an earlier evaluation's model of its
+  /// force (ContactTerm: SolverSettings::contact_reuse ρ r becomes `scale` ρ r). The
+  /// simulator passes on Simulator::set_reuse_scale; a term that reuses nothing ignores it.
+  virtual void set_reuse_scale(double scale) {}
   /// Number of add_force calls so far (counted by the terms that are costly to evaluate;
   /// -1 when not counted).
   virtual long long evaluations() const { return -1; }

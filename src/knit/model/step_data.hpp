@@ -147,6 +147,9 @@ struct StepData {
   double solve_residual = 0;
   /// The IMEX step reused the last step's matrix M + h² K (SolverSettings::contact_reuse).
   bool matrix_kept = false;
+  /// The scale of the contact reuse distances the IMEX step ran with
+  /// (Simulator::set_reuse_scale; 1 unless a relaxation widened them).
+  double reuse_scale = 1;
   std::vector<ConstraintRecord> constraints;
   FrictionRecord friction;
   /// wall seconds per stage, summed since the simulator's timings were reset: each term's

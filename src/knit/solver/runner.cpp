@@ -314,6 +314,7 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
   long long contact_samples = 0;
   // the IMEX_CONTACT step's conjugate-gradient solves
   long long solve_steps = 0, solve_iterations = 0, contact_linearised = 0, matrix_kept = 0;
+  double reuse_scale_sum = 0;
   int solve_iterations_max = 0;
   double solve_residual_max = 0;
   double min_d = std::numeric_limits<double>::infinity();
@@ -419,6 +420,7 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
       contact_linearised += data.contact.linearised;
     }
     matrix_kept += data.matrix_kept;
+    reuse_scale_sum += data.reuse_scale;
     if (data.solve_iterations > 0) {
       ++solve_steps;
       solve_iterations += data.solve_iterations;
@@ -553,6 +555,7 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
   }
   if (model.params.solver.contact_reuse > 0 && report.steps > 0) {
     s["matrix_kept_fraction"] = static_cast<double>(matrix_kept) / report.steps;
+    s["contact_reuse_scale_mean"] = reuse_scale_sum / static_cast<double>(report.steps);
   }
   s["constraint_forces"] = constraint_forces_json(data);
   if (friction.steps > 0) {

@@ -9,6 +9,7 @@
 #include <functional>
 #include <limits>
 #include <sstream>
+#include <stdexcept>
 
 #include "knit/constraints/clamp.hpp"
 #include "knit/constraints/inextensibility.hpp"
@@ -111,9 +112,18 @@ Simulator::Simulator(Model model, std::vector<std::unique_ptr<Term>> terms)
 
 void Simulator::add_term(std::unique_ptr<Term> term) {
   enable_operator_stiffness(*term);
+  term->set_reuse_scale(m_reuse_scale);
   m_terms.push_back(std::move(term));
   m_cached = false;
   m_kept_valid = false;  // the kept matrix lacks the new term's stiffness
+}
+
+void Simulator::set_reuse_scale(double scale) {
+  if (!std::isfinite(scale) || !(scale > 0))
+    throw std::invalid_argument("reuse scale = " + short_number(scale) +
+                                ": expected a finite number > 0");
+  m_reuse_scale = scale;
+  for (auto& term : m_terms) term->set_reuse_scale(scale);
 }
 
 void Simulator::enable_operator_stiffness(Term& term) {
@@ -355,7 +365,8 @@ bool Simulator::imex_step(const State& s, double h, Eigen::VectorXd& q_out,
   // factor, the glues' W and S) is kept while every control point stays within the reuse
   // distance of where it was formed: linearly implicit Euler with a lagged Jacobian, the
   // contact linearisation's counterpart (docs/model.md §5.2)
-  const double reuse = m_model.params.solver.contact_reuse * m_model.params.material.radius;
+  const double reuse =
+      m_reuse_scale * m_model.params.solver.contact_reuse * m_model.params.material.radius;
   bool keep = false;
   if (reuse > 0 && !m_model.params.solver.length_constraints && m_kept_valid && h == m_kept_h &&
       m_kept_q.size() == s.q.size()) {
@@ -365,6 +376,7 @@ bool Simulator::imex_step(const State& s, double h, Eigen::VectorXd& q_out,
     keep = moved2 <= reuse * reuse;
   }
   m_data.matrix_kept = keep;
+  m_data.reuse_scale = m_reuse_scale;
   // the implicit terms' stiffness at q, summed
   bool any = keep && m_kept_any;
   if (!keep) {

@@ -83,6 +83,13 @@ class Simulator {
   /// caller that reads whole records only now and then (the runner, at its outputs).
   void set_lean_records(bool on) { m_lean = on; }
   bool lean_records() const { return m_lean; }
+  /// Scales the distances of contact reuse (SolverSettings::contact_reuse): an exact
+  /// contact evaluation's linearisation and the kept matrix M + h² K are reused while every
+  /// control point stays within `scale` ρ r of where they were formed. 1 at first; a
+  /// relaxation widens it while far from rest (RelaxOptions::contact_reuse_widen). Throws
+  /// std::invalid_argument unless finite and > 0. Recorded in data().reuse_scale.
+  void set_reuse_scale(double scale);
+  double reuse_scale() const { return m_reuse_scale; }
   /// What the last forward and step recorded (see step_data.hpp).
   const StepData& data() const { return m_data; }
   /// Clears the stage timings in data().
@@ -157,6 +164,7 @@ class Simulator {
   // the state data() describes, and the force there (reused as a step's first evaluation)
   bool m_cached = false;
   bool m_lean = false;
+  double m_reuse_scale = 1;  // set_reuse_scale
   // the terms (indices) the cached forward left out, and the energy of the others
   std::vector<size_t> m_left_out;
   double m_recorded_energy = 0;
