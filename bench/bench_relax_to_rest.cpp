@@ -7,10 +7,12 @@
 //                       [--methods dynamic:explicit:8.474576271186441e-05,fire:imex:3e-4,
 //                                  fire:imex-contact:6e-4,fire:imex-contact:6e-4:0.05]
 //                       [--max-time S] [--threads N]
-// A method is KIND:INTEGRATOR:H[:REUSE] — KIND dynamic (damped dynamics, the kinetic-energy
-// rest test unless --residual is given) or fire (FIRE minimisation, the force-residual
-// test), INTEGRATOR explicit, imex or imex-contact, H the time step (s), and with
-// imex-contact REUSE the contact reuse distance in yarn radii (SolverSettings::contact_reuse).
+// A method is KIND:INTEGRATOR:H[:REUSE[:WIDEN]] — KIND dynamic (damped dynamics, the
+// kinetic-energy rest test unless --residual is given) or fire (FIRE minimisation, the
+// force-residual test), INTEGRATOR explicit, imex or imex-contact, H the time step (s), and
+// with imex-contact REUSE the contact reuse distance in yarn radii
+// (SolverSettings::contact_reuse) and WIDEN the factor it widens by far from rest
+// (RelaxOptions::contact_reuse_widen, with its default residual).
 #include <CLI/CLI.hpp>
 #include <iostream>
 
@@ -24,17 +26,22 @@ struct Method {
   knit::Integrator integrator = knit::Integrator::EXPLICIT;
   double h = 0;
   double contact_reuse = 0;
+  double widen = 1;
   std::string text;
 };
 
 Method parse_method(const std::string& text) {
   const auto parts = knit::bench::split_list(text, ':');
-  if (parts.size() < 3 || parts.size() > 4 || (parts[0] != "dynamic" && parts[0] != "fire"))
+  if (parts.size() < 3 || parts.size() > 5 || (parts[0] != "dynamic" && parts[0] != "fire"))
     throw std::invalid_argument("'" + text +
-                                "': expected KIND:INTEGRATOR:H[:REUSE], KIND dynamic or fire (e.g. "
-                                "fire:imex:3e-4 or fire:imex-contact:6e-4:0.05)");
-  return {parts[0] == "fire", knit::parse_integrator(parts[1]), std::stod(parts[2]),
-          parts.size() == 4 ? std::stod(parts[3]) : 0.0, text};
+                                "': expected KIND:INTEGRATOR:H[:REUSE[:WIDEN]], KIND dynamic or "
+                                "fire (e.g. fire:imex:3e-4 or fire:imex-contact:6e-4:0.05:2)");
+  return {parts[0] == "fire",
+          knit::parse_integrator(parts[1]),
+          std::stod(parts[2]),
+          parts.size() >= 4 ? std::stod(parts[3]) : 0.0,
+          parts.size() == 5 ? std::stod(parts[4]) : 1.0,
+          text};
 }
 
 constexpr const char* SHAPE_KEYS[] = {"course_length_cm", "wale_length_cm", "course_extent_cm",
@@ -53,7 +60,7 @@ int main(int argc, char** argv) {
   app.add_option("--patterns", patterns_text, "comma-separated patterns");
   app.add_option("--rows", rows);
   app.add_option("--cols", cols);
-  app.add_option("--methods", methods_text, "comma-separated KIND:INTEGRATOR:H[:REUSE]");
+  app.add_option("--methods", methods_text, "comma-separated KIND:INTEGRATOR:H[:REUSE[:WIDEN]]");
   app.add_option("--max-time", max_time, "simulated seconds at most per run");
   app.add_option("--residual", residual,
                  "force-residual rest threshold for every method (cm/s²; 0: the kinetic-energy "
@@ -76,6 +83,7 @@ int main(int argc, char** argv) {
       o.params.solver.integrator = m.integrator;
       o.params.solver.time_step = m.h;
       o.params.solver.contact_reuse = m.contact_reuse;
+      o.run.contact_reuse_widen = m.widen;
       o.run.max_time = max_time;
       o.run.force_residual = residual;
       o.run.check_every = std::max(1, static_cast<int>(std::lround(0.015 / m.h)));
@@ -97,6 +105,7 @@ int main(int argc, char** argv) {
           {"force_residual", s["force_residual"]},
           {"contact_linearised_fraction", s.value("contact_linearised_fraction", nlohmann::json())},
           {"matrix_kept_fraction", s.value("matrix_kept_fraction", nlohmann::json())},
+          {"contact_reuse_scale_mean", s.value("contact_reuse_scale_mean", nlohmann::json())},
           {"stage_seconds", s["stage_seconds"]}};
       for (const char* key : SHAPE_KEYS) j[key] = s.value(key, nlohmann::json());
       if (first.is_null()) {

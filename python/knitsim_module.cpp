@@ -455,7 +455,8 @@ PYBIND11_MODULE(knitsim, m) {
          std::optional<bool> in_the_round, double max_time, double rest, double stitch_size,
          double shrink, int segments_per_stitch, const py::object& params, const std::string& out,
          bool overwrite, bool progress, const py::object& resume, bool fire, double residual,
-         std::optional<bool> bind_off, std::optional<bool> cast_on) {
+         std::optional<bool> bind_off, std::optional<bool> cast_on, double contact_reuse_widen,
+         double contact_reuse_widen_residual) {
         RelaxKnitOptions o;
         // resume: a State, or a .kstate path whose knit block gives the defaults (as
         // `knitsim relax --resume FILE`)
@@ -495,6 +496,8 @@ PYBIND11_MODULE(knitsim, m) {
         o.run.max_time = max_time;
         o.run.ke_per_length = rest;
         o.run.force_residual = residual;
+        o.run.contact_reuse_widen = contact_reuse_widen;
+        o.run.contact_reuse_widen_residual = contact_reuse_widen_residual;
         o.fire = fire;
         o.run.out_dir = out;
         o.run.overwrite = overwrite;
@@ -514,7 +517,8 @@ PYBIND11_MODULE(knitsim, m) {
       "max_time"_a = 2.0, "rest"_a = 1e-5, "stitch_size"_a = 0.0, "shrink"_a = RELAX_SHRINK,
       "segments_per_stitch"_a = 8, "params"_a = py::none(), "out"_a = "", "overwrite"_a = false,
       "progress"_a = false, "resume"_a = py::none(), "fire"_a = false, "residual"_a = 0.0,
-      "bind_off"_a = py::none(), "cast_on"_a = py::none(),
+      "bind_off"_a = py::none(), "cast_on"_a = py::none(), "contact_reuse_widen"_a = 1.0,
+      "contact_reuse_widen_residual"_a = 20.0,
       "Generates `pattern` (stockinette, garter, rib2x2, seed, … a chart file or a knitout "
       "program) at rows × cols (default 12 × 12, or the program's size) and relaxes it until it "
       "rests (kinetic energy per length below `rest` erg/cm, or with `residual` > 0 the force "
@@ -524,7 +528,10 @@ PYBIND11_MODULE(knitsim, m) {
       "tie the second row's loops to the first (a cast-on). `resume`: go on from a "
       "knitsim.State of the same knit, or from a .kstate path, whose knit (size, flat or "
       "round, bind-off, cast-on) is then the default and is checked. "
-      "`params`: a dict of scene parameters over the relaxation's. With `out`, writes the run "
+      "`params`: a dict of scene parameters over the relaxation's. `contact_reuse_widen` "
+      "(with params contact_reuse and the imex-contact integrator): widen the reuse distance "
+      "up to this factor while the force residual is above `contact_reuse_widen_residual` "
+      "cm/s² (`knitsim relax --contact-reuse-widen`). With `out`, writes the run "
       "as `knitsim relax --out` does. Returns a Knit.");
 
   // ------------------------------------------------------------- files

@@ -80,6 +80,17 @@ def test_fire_relaxation_rests_by_the_force_residual():
     with pytest.raises(ValueError, match="residual"):
         knitsim.relax("stockinette", rows=4, cols=4, max_time=0.01, residual=-1.0)
 
+
+def test_fire_relaxation_widens_the_contact_reuse_far_from_rest():
+    reuse = {"integrator": "imex-contact", "time_step": 6e-4, "contact_reuse": 0.05}
+    k = knitsim.relax("garter", rows=3, cols=3, max_time=0.03, fire=True, params=reuse,
+                      contact_reuse_widen=3.0, contact_reuse_widen_residual=1.0)
+    s = k.summary
+    assert s["contact_reuse_widen"] == {"max": 3.0, "residual": 1.0}
+    assert 2.0 < s["contact_reuse_scale_mean"] <= 3.0
+    with pytest.raises(ValueError, match="contact-reuse-widen"):
+        knitsim.relax("garter", rows=3, cols=3, max_time=0.01, contact_reuse_widen=2.0)
+
 def test_bind_off_ties_the_last_row(tmp_path):
     # a bound-off knit: two ties per loop of its last row beside the ends' two glues,
     # and its state file says so

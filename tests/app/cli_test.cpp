@@ -221,7 +221,7 @@ TEST(Cli, RelaxFireRestsByTheForceResidual) {
 
 // `relax --contact-reuse` reuses contact's linearisation (imex-contact): the summary says in
 // how many steps; with another integrator, or out of range, it is refused by name before
-// anything is written.
+// anything is written. `--contact-reuse-widen` widens its distance far from rest.
 TEST(Cli, RelaxTakesTheContactReuse) {
   const std::string out = temp_dir("cli_relax_reuse");
   const Result r =
@@ -234,6 +234,48 @@ TEST(Cli, RelaxTakesTheContactReuse) {
   EXPECT_EQ(s["params"]["solver"]["contact_reuse"].get<double>(), 0.05);
   EXPECT_GT(s["contact_linearised_fraction"].get<double>(), 0.0);
   EXPECT_GT(s["matrix_kept_fraction"].get<double>(), 0.0);
+  EXPECT_EQ(s["contact_reuse_scale_mean"].get<double>(), 1.0);
+  EXPECT_FALSE(s.contains("contact_reuse_widen"));
+  // widened far from rest: the generated knit's residual is far above 1 cm/s², so the
+  // steps until the first checks run at the widest
+  const Result wide =
+      run("relax garter --rows 3 --cols 3 --fire --integrator imex-contact --time-step 6e-4 "
+          "--contact-reuse 0.05 --contact-reuse-widen 3 --contact-reuse-widen-residual 1 "
+          "--max-time 0.03 --check-every 25 --quiet --no-frames --out " +
+          out + "_wide");
+  ASSERT_EQ(wide.code, 0) << wide.output;
+  std::ifstream in_wide(out + "_wide/summary.json");
+  const auto w = nlohmann::json::parse(in_wide);
+  EXPECT_EQ(w["contact_reuse_widen"]["max"].get<double>(), 3.0);
+  EXPECT_EQ(w["contact_reuse_widen"]["residual"].get<double>(), 1.0);
+  EXPECT_GT(w["contact_reuse_scale_mean"].get<double>(), 2.0);
+  EXPECT_LE(w["contact_reuse_scale_mean"].get<double>(), 3.0);
+  // resumed in place (no output at the start), with no check in its 25 steps: widened from
+  // its first step by the state it starts from
+  const Result again =
+      run("relax --fire --integrator imex-contact --time-step 6e-4 --contact-reuse 0.05 "
+          "--contact-reuse-widen 3 --contact-reuse-widen-residual 1 --max-time 0.015 "
+          "--check-every 1000 --quiet --no-frames --resume " +
+          out + "_wide/final.kstate --out " + out + "_wide");
+  ASSERT_EQ(again.code, 0) << again.output;
+  std::ifstream in_again(out + "_wide/summary.json");
+  const auto a = nlohmann::json::parse(in_again);
+  EXPECT_EQ(a["steps"].get<int>(), 25);
+  EXPECT_EQ(a["contact_reuse_scale_mean"].get<double>(), 3.0);
+  // widening without reuse, or narrowing, is refused by name before anything is written
+  const Result unused = run(
+      "relax garter --fire --integrator imex-contact --contact-reuse-widen 2 --out " + out + "_u");
+  EXPECT_NE(unused.code, 0);
+  EXPECT_NE(unused.output.find("contact-reuse-widen"), std::string::npos) << unused.output;
+  EXPECT_NE(unused.output.find("--contact-reuse "), std::string::npos) << unused.output;
+  EXPECT_FALSE(fs::exists(out + "_u"));
+  const Result narrow = run(
+      "relax garter --fire --integrator imex-contact --contact-reuse 0.05 --contact-reuse-widen "
+      "0.5 --out " +
+      out + "_n");
+  EXPECT_NE(narrow.code, 0);
+  EXPECT_NE(narrow.output.find("--contact-reuse-widen"), std::string::npos) << narrow.output;
+  EXPECT_FALSE(fs::exists(out + "_n"));
   const Result other =
       run("relax garter --integrator imex --contact-reuse 0.05 --out " + out + "_imex");
   EXPECT_NE(other.code, 0);

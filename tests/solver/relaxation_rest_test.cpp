@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 
 #include "knit/filters/fire.hpp"
 #include "knit/recipes/relax_knit.hpp"
@@ -225,6 +226,19 @@ TEST(Relaxation, FireRelaxesBelowTheDampedEnergyInTheSameTime) {
 namespace knit {
 namespace {
 
+// A relaxation's last state is a true rest: the force residual, taken again by a simulator
+// that evaluates contact afresh every time, is below the FIRE threshold, and is the one the
+// run's last check measured.
+void expect_true_rest(const RelaxResult& r) {
+  Model model = r.model;
+  model.params.solver.contact_reuse = 0;
+  Simulator sim(model);
+  const double residual = sim.force_residual(r.state);
+  EXPECT_LT(residual, RELAX_FIRE_RESIDUAL);
+  EXPECT_NEAR(residual, r.report.summary["force_residual"].get<double>(),
+              1e-6 * RELAX_FIRE_RESIDUAL);
+}
+
 // Contact reuse (SolverSettings::contact_reuse) in a FIRE relaxation: most steps reuse the
 // contact linearisation and the matrix, and the run stops at a true rest — the force
 // residual of its last state, taken again by a simulator that evaluates contact afresh
@@ -245,27 +259,123 @@ TEST(Relaxation, ContactReuseStopsAtATrueRest) {
     o.run.progress = false;
     return relax_knit("garter", o);
   };
-  const RelaxResult plain = relax_with(0), reused = relax_with(0.05);
-  ASSERT_EQ(reused.report.status, StepStatus::OK) << reused.report.message;
-  const nlohmann::json& s = reused.report.summary;
+  const RelaxResult plain = relax_with(0);
   const nlohmann::json& p = plain.report.summary;
   ASSERT_TRUE(p["relaxed"].get<bool>());
-  ASSERT_TRUE(s["relaxed"].get<bool>());
-  EXPECT_GT(s["contact_linearised_fraction"].get<double>(), 0.5);
-  EXPECT_GT(s["matrix_kept_fraction"].get<double>(), 0.5);
   EXPECT_FALSE(p.contains("contact_linearised_fraction"));
-  // the residual again, every force exact
-  Model model = reused.model;
-  model.params.solver.contact_reuse = 0;
-  Simulator sim(model);
-  const double residual = sim.force_residual(reused.state);
-  EXPECT_LT(residual, RELAX_FIRE_RESIDUAL);
-  EXPECT_NEAR(residual, s["force_residual"].get<double>(), 1e-6 * RELAX_FIRE_RESIDUAL);
+  {
+    const RelaxResult reused = relax_with(0.05);
+    ASSERT_EQ(reused.report.status, StepStatus::OK) << reused.report.message;
+    const nlohmann::json& s = reused.report.summary;
+    ASSERT_TRUE(s["relaxed"].get<bool>());
+    EXPECT_GT(s["contact_linearised_fraction"].get<double>(), 0.5);
+    EXPECT_GT(s["matrix_kept_fraction"].get<double>(), 0.5);
+    EXPECT_EQ(s["contact_reuse_scale_mean"].get<double>(), 1.0);
+    expect_true_rest(reused);
+    const double e = s["potential_energy"].get<double>(),
+                 e_plain = p["potential_energy"].get<double>();
+    EXPECT_NEAR(e, e_plain, 0.005 * e_plain);
+    for (const char* key : {"course_length_cm", "wale_length_cm"})
+      EXPECT_NEAR(s[key].get<double>(), p[key].get<double>(), 0.005 * p[key].get<double>()) << key;
+  }
+}
+
+// Contact reuse widened far from rest (RelaxOptions::contact_reuse_widen): the steps run
+// at wider reuse distances until the residual falls, and the run still stops at a true
+// rest. Not necessarily the same one: FIRE's path picks among this small garter's minima
+// (the time step alone, 5e-4 s against 6e-4 s, moves its course length 2.6 %, its wale
+// length 1.4 % and its energy 1.2 %; widened 2×, measured 1.8 %, 0.7 % and 1.3 %), so the
+// rest is held to that spread, not to the 0.5 % of plain reuse.
+TEST(Relaxation, WidenedContactReuseStopsAtATrueRest) {
+  auto relax_with = [](double reuse, double widen) {
+    RelaxKnitOptions o;
+    o.knit.rows = 6;
+    o.knit.cols = 6;
+    o.fire = true;
+    o.params.solver.integrator = Integrator::IMEX_CONTACT;
+    o.params.solver.time_step = 6e-4;
+    o.params.solver.contact_reuse = reuse;
+    o.run.max_time = 10;
+    o.run.check_every = 25;
+    o.run.progress = false;
+    o.run.contact_reuse_widen = widen;
+    return relax_knit("garter", o);
+  };
+  // (plain reuse comes to the rest without reuse: the test above)
+  const RelaxResult plain = relax_with(0.05, 1), wide = relax_with(0.05, 2);
+  const nlohmann::json& p = plain.report.summary;
+  const nlohmann::json& s = wide.report.summary;
+  ASSERT_TRUE(p["relaxed"].get<bool>());
+  ASSERT_EQ(wide.report.status, StepStatus::OK) << wide.report.message;
+  ASSERT_TRUE(s["relaxed"].get<bool>());
+  EXPECT_GT(s["contact_reuse_scale_mean"].get<double>(), 1.1);
+  EXPECT_LE(s["contact_reuse_scale_mean"].get<double>(), 2.0);
+  EXPECT_EQ(s["contact_reuse_widen"]["max"].get<double>(), 2.0);
+  expect_true_rest(wide);
   const double e = s["potential_energy"].get<double>(),
                e_plain = p["potential_energy"].get<double>();
-  EXPECT_NEAR(e, e_plain, 0.005 * e_plain);
+  EXPECT_NEAR(e, e_plain, 0.02 * e_plain);
   for (const char* key : {"course_length_cm", "wale_length_cm"})
-    EXPECT_NEAR(s[key].get<double>(), p[key].get<double>(), 0.005 * p[key].get<double>()) << key;
+    EXPECT_NEAR(s[key].get<double>(), p[key].get<double>(), 0.04 * p[key].get<double>()) << key;
+}
+
+// The widening's options are checked by name (validate_relax_options), also by relax():
+// a factor below 1 or not finite, a residual ≤ 0, and widening where contact reuse is off.
+TEST(Relaxation, ContactReuseWideningIsChecked) {
+  SolverSettings solver;
+  solver.integrator = Integrator::IMEX_CONTACT;
+  solver.contact_reuse = 0.05;
+  RelaxOptions o;
+  o.contact_reuse_widen = 2;
+  EXPECT_NO_THROW(validate_relax_options(o, solver));
+  auto refused = [&](const RelaxOptions& bad, const SolverSettings& settings,
+                     const std::string& name) {
+    try {
+      validate_relax_options(bad, settings);
+      ADD_FAILURE() << name << ": accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+    }
+  };
+  for (const double widen : {0.5, 0.0, -1.0, std::numeric_limits<double>::infinity(),
+                             std::numeric_limits<double>::quiet_NaN()}) {
+    RelaxOptions bad = o;
+    bad.contact_reuse_widen = widen;
+    refused(bad, solver, "contact-reuse-widen");
+  }
+  for (const double residual : {0.0, -1.0, std::numeric_limits<double>::quiet_NaN()}) {
+    RelaxOptions bad = o;
+    bad.contact_reuse_widen_residual = residual;
+    refused(bad, solver, "contact-reuse-widen-residual");
+  }
+  SolverSettings off = solver;
+  off.contact_reuse = 0;
+  refused(o, off, "contact-reuse-widen");
+  // relax() checks against its simulator's settings
+  Params params;
+  params.solver = off;
+  params.solver.integrator = Integrator::IMEX;
+  ModelBuilder b;
+  b.add_yarn(line(20, 10.0));
+  Simulator sim(b.build(params));
+  State state = at_rest(b);
+  o.progress = false;
+  EXPECT_THROW(relax(sim, state, o), std::invalid_argument);
+  EXPECT_EQ(sim.reuse_scale(), 1.0);
+}
+
+// The simulator's reuse scale: finite and > 0, passed to its terms (also to one added later).
+TEST(Simulator, ReuseScaleIsChecked) {
+  ModelBuilder b;
+  b.add_yarn(line(20, 10.0));
+  Simulator sim(b.build(Params{}));
+  EXPECT_EQ(sim.reuse_scale(), 1.0);
+  sim.set_reuse_scale(2.5);
+  EXPECT_EQ(sim.reuse_scale(), 2.5);
+  for (const double bad : {0.0, -1.0, std::numeric_limits<double>::infinity(),
+                           std::numeric_limits<double>::quiet_NaN()})
+    EXPECT_THROW(sim.set_reuse_scale(bad), std::invalid_argument) << bad;
+  EXPECT_EQ(sim.reuse_scale(), 2.5);
 }
 
 }  // namespace

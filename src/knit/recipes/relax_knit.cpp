@@ -182,7 +182,7 @@ State read_resumed_knit_state(const std::string& path, const std::string& patter
 
 KnitRelaxation setup_knit_relaxation(const std::string& pattern_name, const RelaxKnitOptions& o) {
   validate_params(o.params);
-  validate_relax_options(o.run, o.params.solver.time_step);
+  validate_relax_options(o.run, o.params.solver);
   check_knit_relaxation(o.knit, o.shrink, o.params);
   check_knitout_size(pattern_name, o.knit);
   KnitRelaxation r;
@@ -272,7 +272,7 @@ RelaxResult relax_yarns(const std::string& path, const RelaxYarnsOptions& o) {
   Params params = o.params;
   params.material.radius = o.import.radius;
   validate_params(params);
-  validate_relax_options(o.run, params.solver.time_step);
+  validate_relax_options(o.run, params.solver);
   ModelBuilder builder;
   for (const ImportedYarn& y : import_yarns(path, o.import)) builder.add_yarn(y.control_points);
   const Model model = builder.build(params, o.shrink);

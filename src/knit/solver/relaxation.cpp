@@ -1,13 +1,14 @@
 #include "knit/solver/relaxation.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
 namespace knit {
 
-void validate_relax_options(const RelaxOptions& o, double time_step) {
+void validate_relax_options(const RelaxOptions& o, const SolverSettings& solver) {
   try {
-    check_duration(o.max_time, time_step);
+    check_duration(o.max_time, solver.time_step);
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(std::string("max-time: ") + e.what());
   }
@@ -18,6 +19,17 @@ void validate_relax_options(const RelaxOptions& o, double time_step) {
     throw std::invalid_argument("residual = " + short_number(o.force_residual) +
                                 " cm/s²: expected a finite number ≥ 0 (0: the kinetic-energy "
                                 "test)");
+  if (!std::isfinite(o.contact_reuse_widen) || !(o.contact_reuse_widen >= 1))
+    throw std::invalid_argument("contact-reuse-widen = " + short_number(o.contact_reuse_widen) +
+                                ": expected a finite factor ≥ 1 (1: no widening)");
+  if (!std::isfinite(o.contact_reuse_widen_residual) || !(o.contact_reuse_widen_residual > 0))
+    throw std::invalid_argument(
+        "contact-reuse-widen-residual = " + short_number(o.contact_reuse_widen_residual) +
+        " cm/s²: expected a finite number > 0");
+  if (o.contact_reuse_widen > 1 && !(solver.contact_reuse > 0))
+    throw std::invalid_argument("contact-reuse-widen = " + short_number(o.contact_reuse_widen) +
+                                " widens contact reuse, which is off (give --contact-reuse "
+                                "with the imex-contact integrator)");
   if (o.check_every < 1)
     throw std::invalid_argument("check-every = " + std::to_string(o.check_every) +
                                 ": expected at least 1 step");
@@ -26,6 +38,8 @@ void validate_relax_options(const RelaxOptions& o, double time_step) {
 RunReport relax(Simulator& sim, State& state, const RelaxOptions& o, nlohmann::json extra,
                 std::function<void(Simulator&, const State&, nlohmann::json&)> on_finish) {
   const double length = sim.model().total_length();
+  validate_relax_options(o, sim.model().params.solver);
+  const bool widen = o.contact_reuse_widen > 1;
   bool reached = false;
   RunOptions run;
   run.duration = o.max_time;
@@ -39,7 +53,22 @@ RunReport relax(Simulator& sim, State& state, const RelaxOptions& o, nlohmann::j
   const bool residual_test = o.force_residual > 0;
   // every check measures the force residual (a force evaluation and two projections per
   // check_every steps), so that the log shows how far from rest a run is by both tests
-  run.before_output = [](Simulator& s, const State& st) { s.force_residual(st); };
+  // (and sets the reuse distances' scale for the steps until the next check; the
+  // simulator's own scale is restored on return)
+  struct ScaleGuard {
+    Simulator& sim;
+    double scale;
+    ~ScaleGuard() { sim.set_reuse_scale(scale); }
+  } guard{sim, sim.reuse_scale()};
+  auto check = [&](Simulator& s, const State& st) {
+    const double r = s.force_residual(st);
+    if (widen && std::isfinite(r))
+      s.set_reuse_scale(std::clamp(r / o.contact_reuse_widen_residual, 1.0, o.contact_reuse_widen));
+  };
+  run.before_output = check;
+  // a run that goes on in place writes no output at its start: its first steps are widened
+  // by the state it starts from all the same
+  if (widen && o.continue_in_place) check(sim, state);
   run.stop_when = [&](const StepData& data, const State&) {
     reached = residual_test ? data.force_residual < o.force_residual
                             : data.kinetic_energy / length < o.ke_per_length;
@@ -52,6 +81,9 @@ RunReport relax(Simulator& sim, State& state, const RelaxOptions& o, nlohmann::j
   run.on_finish = [&](Simulator& s, const State& st, nlohmann::json& summary) {
     summary["relaxed"] = reached;
     summary["ke_per_length"] = s.data().kinetic_energy / length;
+    if (widen)
+      summary["contact_reuse_widen"] = {{"max", o.contact_reuse_widen},
+                                        {"residual", o.contact_reuse_widen_residual}};
     if (on_finish) on_finish(s, st, summary);
   };
   return run_simulation(sim, state, run);

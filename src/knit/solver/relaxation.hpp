@@ -32,12 +32,22 @@ struct RelaxOptions {
   bool continue_in_place = false;
   std::string resume_command;  ///< written into the summary of an interrupted run
   int halving_calm_steps = 0;  ///< RunOptions::halving_calm_steps
+  /// With contact reuse (SolverSettings::contact_reuse ρ > 0): while the knit is far from
+  /// rest its reuse distances widen, to ρ r · clamp(R / R₀, 1, contact_reuse_widen) with R
+  /// the force residual of the last check and R₀ = contact_reuse_widen_residual
+  /// (Simulator::set_reuse_scale). A knit that draws in and curls moves every control
+  /// point past ρ r within a few steps, each such step paying an exact contact evaluation
+  /// and a new factor of M + h² K; near rest the reuse distance is ρ r again. The checks
+  /// evaluate contact exactly, so rest is the same test. 1 (the default): no widening.
+  double contact_reuse_widen = 1;
+  double contact_reuse_widen_residual = 20;  ///< R₀ (cm/s²)
 };
 
 /// Throws std::invalid_argument naming the option when a RelaxOptions field is out of
-/// range (max_time: a duration for time step h; ke_per_length finite and > 0;
-/// force_residual finite and ≥ 0; check_every ≥ 1).
-void validate_relax_options(const RelaxOptions& options, double time_step);
+/// range (max_time: a duration for the solver's time step; ke_per_length finite and > 0;
+/// force_residual finite and ≥ 0; check_every ≥ 1; contact_reuse_widen finite and ≥ 1, and
+/// 1 unless solver.contact_reuse > 0; contact_reuse_widen_residual finite and > 0).
+void validate_relax_options(const RelaxOptions& options, const SolverSettings& solver);
 
 /// The shrink factor c of MODEL.md §6.
 inline constexpr double RELAX_SHRINK = 0.935;
@@ -59,8 +69,11 @@ inline constexpr double RELAX_K_GLOBAL = 0.15;
 /// the time step and shrunk rest lengths). The summary gains `relaxed` (bool: the threshold was
 /// reached), `rest_test` ("kinetic_energy" or "residual"), `ke_per_length_threshold` and
 /// `ke_per_length` (erg/cm), and with the residual test `force_residual_threshold`
-/// (cm/s²; the summary's `force_residual` is the last state's). `on_finish` (optional) adds
-/// further fields to the summary.
+/// (cm/s²; the summary's `force_residual` is the last state's); with widening,
+/// `contact_reuse_widen` {max, residual} (the runner's `contact_reuse_scale_mean` says how
+/// wide the steps ran). `on_finish` (optional)
+/// adds further fields to the summary. Throws std::invalid_argument where
+/// validate_relax_options does (with the sim's solver settings).
 RunReport relax(Simulator& sim, State& state, const RelaxOptions& options,
                 nlohmann::json extra = nlohmann::json::object(),
                 std::function<void(Simulator&, const State&, nlohmann::json&)> on_finish = {});
