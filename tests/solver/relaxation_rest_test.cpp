@@ -239,6 +239,23 @@ void expect_true_rest(const RelaxResult& r) {
               1e-6 * RELAX_FIRE_RESIDUAL);
 }
 
+// The 6×6 garter relaxed by FIRE with imex-contact at 6e-4 s, contact reuse ρ = `reuse`
+// widened up to `widen` (RelaxOptions::contact_reuse_widen), checked every 25 steps.
+RelaxResult relax_garter_6x6(double reuse, double widen = 1) {
+  RelaxKnitOptions o;
+  o.knit.rows = 6;
+  o.knit.cols = 6;
+  o.fire = true;
+  o.params.solver.integrator = Integrator::IMEX_CONTACT;
+  o.params.solver.time_step = 6e-4;
+  o.params.solver.contact_reuse = reuse;
+  o.run.max_time = 10;
+  o.run.check_every = 25;
+  o.run.progress = false;
+  o.run.contact_reuse_widen = widen;
+  return relax_knit("garter", o);
+}
+
 // Contact reuse (SolverSettings::contact_reuse) in a FIRE relaxation: most steps reuse the
 // contact linearisation and the matrix, and the run stops at a true rest — the force
 // residual of its last state, taken again by a simulator that evaluates contact afresh
@@ -246,25 +263,12 @@ void expect_true_rest(const RelaxResult& r) {
 // without reuse (measured on this 6×6 garter: energy 852.227 against 852.226 erg, lengths
 // along the fabric within 2e-5; allowed 0.5 %).
 TEST(Relaxation, ContactReuseStopsAtATrueRest) {
-  auto relax_with = [](double reuse) {
-    RelaxKnitOptions o;
-    o.knit.rows = 6;
-    o.knit.cols = 6;
-    o.fire = true;
-    o.params.solver.integrator = Integrator::IMEX_CONTACT;
-    o.params.solver.time_step = 6e-4;
-    o.params.solver.contact_reuse = reuse;
-    o.run.max_time = 10;
-    o.run.check_every = 25;
-    o.run.progress = false;
-    return relax_knit("garter", o);
-  };
-  const RelaxResult plain = relax_with(0);
+  const RelaxResult plain = relax_garter_6x6(0);
   const nlohmann::json& p = plain.report.summary;
   ASSERT_TRUE(p["relaxed"].get<bool>());
   EXPECT_FALSE(p.contains("contact_linearised_fraction"));
   {
-    const RelaxResult reused = relax_with(0.05);
+    const RelaxResult reused = relax_garter_6x6(0.05);
     ASSERT_EQ(reused.report.status, StepStatus::OK) << reused.report.message;
     const nlohmann::json& s = reused.report.summary;
     ASSERT_TRUE(s["relaxed"].get<bool>());
@@ -287,22 +291,8 @@ TEST(Relaxation, ContactReuseStopsAtATrueRest) {
 // length 1.4 % and its energy 1.2 %; widened 2×, measured 1.8 %, 0.7 % and 1.3 %), so the
 // rest is held to that spread, not to the 0.5 % of plain reuse.
 TEST(Relaxation, WidenedContactReuseStopsAtATrueRest) {
-  auto relax_with = [](double reuse, double widen) {
-    RelaxKnitOptions o;
-    o.knit.rows = 6;
-    o.knit.cols = 6;
-    o.fire = true;
-    o.params.solver.integrator = Integrator::IMEX_CONTACT;
-    o.params.solver.time_step = 6e-4;
-    o.params.solver.contact_reuse = reuse;
-    o.run.max_time = 10;
-    o.run.check_every = 25;
-    o.run.progress = false;
-    o.run.contact_reuse_widen = widen;
-    return relax_knit("garter", o);
-  };
   // (plain reuse comes to the rest without reuse: the test above)
-  const RelaxResult plain = relax_with(0.05, 1), wide = relax_with(0.05, 2);
+  const RelaxResult plain = relax_garter_6x6(0.05), wide = relax_garter_6x6(0.05, 2);
   const nlohmann::json& p = plain.report.summary;
   const nlohmann::json& s = wide.report.summary;
   ASSERT_TRUE(p["relaxed"].get<bool>());
