@@ -3,6 +3,7 @@
 // physics and against the explicit reference step.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <iostream>
@@ -81,6 +82,44 @@ TEST(Imex, BandSolverMatchesDenseCholesky) {
 
   blocks[3] = -blocks[3] * 1e6;  // not positive definite: refused, not solved
   EXPECT_FALSE(solver.factor(m, blocks, h2));
+}
+
+// Extra blocks added as the matrix is assembled (StiffSolver::ExtraBlock: the contact's
+// share, applied as an operator, in the preconditioner): each is given a zero block to add
+// into, and the factor is that of the blocks with the extra parts summed in (against
+// Eigen's dense LLT), on one yarn and on two, with some segments adding nothing.
+TEST(Imex, BandSolverAddsExtraBlocks) {
+  for (const int yarns : {1, 2}) {
+    SCOPED_TRACE(std::to_string(yarns) + " yarns");
+    ModelBuilder b;
+    b.add_yarn(line(40, 6.0));
+    if (yarns == 2) b.add_yarn(line(9, 2.0));
+    const Model m = b.build(Params{});
+    const std::vector<Matrix12d> blocks = random_semidefinite_blocks(m, 50.0);
+    const std::vector<Matrix12d> extra_parts = random_semidefinite_blocks(m, 20.0);
+    auto has_extra = [](int i) { return i % 3 != 1; };
+    const double h2 = 1e-4;
+    Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(m.num_dof(), m.num_dof());
+    for (int d = 0; d < m.num_dof(); ++d) dense(d, d) = m.mass[d / 3];
+    for (int i = 0; i < m.num_seg(); ++i)
+      dense.block<12, 12>(3 * m.seg_cp[i], 3 * m.seg_cp[i]) +=
+          h2 * (has_extra(i) ? Matrix12d(blocks[i] + extra_parts[i]) : blocks[i]);
+    std::atomic<int> nonzero_given{0};
+    const StiffSolver::ExtraBlock extra = [&](int i, Matrix12d& block) {
+      if (block.cwiseAbs().maxCoeff() != 0) ++nonzero_given;
+      if (!has_extra(i)) return false;
+      block += extra_parts[i];
+      return true;
+    };
+    const Eigen::VectorXd rhs = Eigen::VectorXd::Random(m.num_dof());
+    const Eigen::VectorXd expected = dense.llt().solve(rhs);
+    StiffSolver solver;
+    ASSERT_TRUE(solver.factor(m, blocks, h2, {}, extra));
+    EXPECT_EQ(nonzero_given.load(), 0) << "extra is given zero blocks";
+    Eigen::VectorXd x;
+    solver.solve(rhs, x);
+    EXPECT_LT((x - expected).norm(), 1e-10 * expected.norm());
+  }
 }
 
 // The glues' W = L⁻¹ Jᵀ solved column by column where each column lives: from its first

@@ -423,9 +423,11 @@ bool Simulator::imex_step(const State& s, double h, Eigen::VectorXd& q_out,
     StiffSolver::ExtraBlock operator_blocks;
     if (m_has_operator_terms)
       operator_blocks = [&](int i, Matrix12d& block) {
+        bool added = false;
         for (const auto& term : m_terms)
           if (term->has_operator_stiffness() && implicit(*term))
-            term->add_operator_segment_block(m_model, i, block);
+            added |= term->add_operator_segment_block(m_model, i, block);
+        return added;
       };
     {
       ScopedTimer factor_timer(m_data.stage_seconds["implicit_factor"]);

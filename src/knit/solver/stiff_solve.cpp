@@ -27,28 +27,36 @@ bool StiffSolver::factor(const Model& model, const std::vector<Matrix12d>& block
     for (int c = 0; c < 12; ++c)
       for (int r = c; r < 12; ++r) a[(base + c) * W + (r - c)] += h2 * b(r, c);
   };
+  // segment i's block and its extra part: `e` holds what extra added to a zero block, and
+  // is zero again after (the blocks are not copied; the sums are those of adding the extra
+  // part into a copy of the block)
+  auto add_block_and_extra = [&](int i, Matrix12d& e) {
+    if (!extra(i, e)) {
+      add_block(i, blocks[i]);
+      return;
+    }
+    const Matrix12d& b = blocks[i];
+    const int base = 3 * model.seg_cp[i];
+    for (int c = 0; c < 12; ++c)
+      for (int r = c; r < 12; ++r) a[(base + c) * W + (r - c)] += h2 * (b(r, c) + e(r, c));
+    e.setZero();
+  };
   const int n_seg = model.num_seg();
   bool ascending = true;  // each segment's first control point after the one before's
   for (int i = 1; i < n_seg && ascending; ++i) ascending = model.seg_cp[i] > model.seg_cp[i - 1];
   if (!extra) {
     for (int i = 0; i < n_seg; ++i) add_block(i, blocks[i]);
   } else if (!ascending) {
-    for (int i = 0; i < n_seg; ++i) {
-      Matrix12d b = blocks[i];
-      extra(i, b);
-      add_block(i, b);
-    }
+    Matrix12d e = Matrix12d::Zero();
+    for (int i = 0; i < n_seg; ++i) add_block_and_extra(i, e);
   } else {
     // segments i and i + 4 cover disjoint coordinates: each set writes disjoint columns
     for (int set = 0; set < 4; ++set)
       tbb::parallel_for(tbb::blocked_range<int>(0, (n_seg - set + 3) / 4, 64),
                         [&](const tbb::blocked_range<int>& r) {
-                          for (int k = r.begin(); k < r.end(); ++k) {
-                            const int i = set + 4 * k;
-                            Matrix12d b = blocks[i];
-                            extra(i, b);
-                            add_block(i, b);
-                          }
+                          Matrix12d e = Matrix12d::Zero();
+                          for (int k = r.begin(); k < r.end(); ++k)
+                            add_block_and_extra(set + 4 * k, e);
                         });
   }
   // the fixed coordinates: their couplings to the free ones kept for solve, then their

@@ -32,8 +32,10 @@ class StiffSolver {
   /// The same with `extra(i, block)` adding more to segment i's block as it is assembled
   /// (the preconditioner's share of terms applied as operators), called for different
   /// segments at once; the blocks are then summed in parallel, four interleaved sets of
-  /// segments one after another (segments four apart share no coordinate).
-  using ExtraBlock = std::function<void(int, Matrix12d&)>;
+  /// segments one after another (segments four apart share no coordinate). `extra` is
+  /// given a zero block to add into, and returns false where it added nothing (the block
+  /// must then be left zero).
+  using ExtraBlock = std::function<bool(int, Matrix12d&)>;
   bool factor(const Model& model, const std::vector<Matrix12d>& blocks, double h2,
               const std::vector<int>& fixed, const ExtraBlock& extra);
   /// Solves the factored system for `rhs` (size 3 × control points) into x. At a fixed
