@@ -756,7 +756,7 @@ TEST(ContactTerm, ReusedLinearisationIsSecondOrderAccurate) {
 }
 
 // The reuse distance scales with set_reuse_scale (Simulator::set_reuse_scale): a move of
-// 1.5 ρ r is beyond reach at scale 1, within it at 2, and beyond it again at 1.
+// 1.5 ρ r is beyond reach at scales 1 and 1.4, within it at 1.6 and 2.
 TEST(ContactTerm, ReuseScaleWidensTheReach) {
   Params p;
   p.solver.integrator = Integrator::IMEX_CONTACT;

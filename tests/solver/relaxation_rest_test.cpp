@@ -239,6 +239,16 @@ void expect_true_rest(const RelaxResult& r) {
               1e-6 * RELAX_FIRE_RESIDUAL);
 }
 
+// A rest's potential energy within `energy` (relative) of another's, and its lengths along
+// the fabric within `length` (relative), from their summaries.
+void expect_rest_near(const nlohmann::json& s, const nlohmann::json& p, double energy,
+                      double length) {
+  const double e = p["potential_energy"].get<double>();
+  EXPECT_NEAR(s["potential_energy"].get<double>(), e, energy * e);
+  for (const char* key : {"course_length_cm", "wale_length_cm"})
+    EXPECT_NEAR(s[key].get<double>(), p[key].get<double>(), length * p[key].get<double>()) << key;
+}
+
 // The 6×6 garter relaxed by FIRE with imex-contact at 6e-4 s, contact reuse ρ = `reuse`
 // widened up to `widen` (RelaxOptions::contact_reuse_widen), checked every 25 steps.
 RelaxResult relax_garter_6x6(double reuse, double widen = 1) {
@@ -276,11 +286,7 @@ TEST(Relaxation, ContactReuseStopsAtATrueRest) {
     EXPECT_GT(s["matrix_kept_fraction"].get<double>(), 0.5);
     EXPECT_EQ(s["contact_reuse_scale_mean"].get<double>(), 1.0);
     expect_true_rest(reused);
-    const double e = s["potential_energy"].get<double>(),
-                 e_plain = p["potential_energy"].get<double>();
-    EXPECT_NEAR(e, e_plain, 0.005 * e_plain);
-    for (const char* key : {"course_length_cm", "wale_length_cm"})
-      EXPECT_NEAR(s[key].get<double>(), p[key].get<double>(), 0.005 * p[key].get<double>()) << key;
+    expect_rest_near(s, p, 0.005, 0.005);
   }
 }
 
@@ -302,11 +308,7 @@ TEST(Relaxation, WidenedContactReuseStopsAtATrueRest) {
   EXPECT_LE(s["contact_reuse_scale_mean"].get<double>(), 2.0);
   EXPECT_EQ(s["contact_reuse_widen"]["max"].get<double>(), 2.0);
   expect_true_rest(wide);
-  const double e = s["potential_energy"].get<double>(),
-               e_plain = p["potential_energy"].get<double>();
-  EXPECT_NEAR(e, e_plain, 0.02 * e_plain);
-  for (const char* key : {"course_length_cm", "wale_length_cm"})
-    EXPECT_NEAR(s[key].get<double>(), p[key].get<double>(), 0.04 * p[key].get<double>()) << key;
+  expect_rest_near(s, p, 0.02, 0.04);
 }
 
 // The widening's options are checked by name (validate_relax_options), also by relax():

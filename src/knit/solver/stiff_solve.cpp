@@ -28,8 +28,8 @@ bool StiffSolver::factor(const Model& model, const std::vector<Matrix12d>& block
       for (int r = c; r < 12; ++r) a[(base + c) * W + (r - c)] += h2 * b(r, c);
   };
   // segment i's block and its extra part: `e` holds what extra added to a zero block, and
-  // is zero again after (the blocks are not copied; the sums are those of adding the extra
-  // part into a copy of the block)
+  // is zero again after (the blocks are not copied; where extra adds once per entry, as the
+  // contact's operator blocks do, the sums are those of adding it into a copy of the block)
   auto add_block_and_extra = [&](int i, Matrix12d& e) {
     if (!extra(i, e)) {
       add_block(i, blocks[i]);
