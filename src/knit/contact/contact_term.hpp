@@ -116,9 +116,10 @@ class ContactTerm : public Term {
   ///
   /// Reuse (SolverSettings::contact_reuse ρ > 0, with the stiffness operator on). An exact
   /// evaluation at (q₀, v₀) keeps its force f₀, energy E₀ and per point pair in contact its
-  /// Δ₀ and stiffness. While every control point stays within ρ r of q₀, later evaluations
-  /// run no kernels and return the first-order model around it instead (Kaldor, James and
-  /// Marschner 2010 reuse linearised contact models over many steps), per point pair with
+  /// Δ₀ and stiffness. While every control point stays within ρ r of q₀ (times the scale of
+  /// set_reuse_scale), later evaluations run no kernels and return the first-order model
+  /// around it instead (Kaldor, James and Marschner 2010 reuse linearised contact models
+  /// over many steps), per point pair with
   /// u = J (q − q₀) and w = J (v − v₀) the changes of Δ and Δv:
   ///   F_j = F_j⁰ − H u + (damping's force of w with Δ₀'s normal),  F_i = −F_j
   ///   E = E₀ + Σ (−F_j⁰·u + ½ uᵀH u)
