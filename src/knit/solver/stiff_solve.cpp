@@ -122,12 +122,22 @@ void StiffSolver::solve_forward(const Eigen::VectorXd& rhs, Eigen::VectorXd& y) 
 void StiffSolver::forward(Eigen::VectorXd& x, int first) const {
   const double* a = m_band.data();
   const double* inv = m_inv_pivot.data();
-  // L y = b
-  for (int j = std::max(0, first); j < m_n; ++j) {
+  // L y = b; the columns with a full band first, their length a constant (unrolled: the
+  // same operations in the same order, in half the time of a loop of runtime length)
+  double* y = x.data();
+  int j = std::max(0, first);
+  for (; j < m_n - BAND; ++j) {
     const double* col = a + static_cast<size_t>(j) * W;
-    x[j] *= inv[j];
-    const int m = std::min(BAND, m_n - 1 - j);
-    for (int r = 1; r <= m; ++r) x[j + r] -= col[r] * x[j];
+    y[j] *= inv[j];
+    const double yj = y[j];
+#pragma GCC unroll 16
+    for (int r = 1; r <= BAND; ++r) y[j + r] -= col[r] * yj;
+  }
+  for (; j < m_n; ++j) {
+    const double* col = a + static_cast<size_t>(j) * W;
+    y[j] *= inv[j];
+    const int m = m_n - 1 - j;
+    for (int r = 1; r <= m; ++r) y[j + r] -= col[r] * y[j];
   }
 }
 
