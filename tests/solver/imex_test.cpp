@@ -60,6 +60,17 @@ TEST(Imex, BandSolverMatchesDenseCholesky) {
   EXPECT_NEAR(y.squaredNorm(), rhs.dot(expected), 1e-10 * std::abs(rhs.dot(expected)));
   solver.backward(y);
   EXPECT_LT((y - expected).norm(), 1e-10 * expected.norm());
+  // a right-hand side zero before `first`: the forward half from there is the whole one's,
+  // bit for bit, wherever it starts (among the columns with a full band, or the last ones)
+  const int n = m.num_dof();
+  for (const int first : {0, 1, 7, n - 12, n - 11, n - 3, n - 1}) {
+    Eigen::VectorXd from = rhs, whole;
+    from.head(first).setZero();
+    whole = from;
+    solver.forward(whole);
+    solver.forward(from, first);
+    for (int d = 0; d < n; ++d) ASSERT_EQ(from[d], whole[d]) << "first " << first << ", row " << d;
+  }
 
   // with given values at some coordinates (a clamp's): the free ones solve the rows of
   // the free ones, and the fixed ones' rows leave over what held them
