@@ -107,6 +107,7 @@ py::dict knit_info(const std::optional<KnitInfo>& k) {
   d["shrink"] = k->shrink;
   d["bind_off"] = k->bind_off;
   d["cast_on"] = k->cast_on;
+  if (k->relaxation) d["relaxation"] = to_python(to_json(*k->relaxation));
   return d;
 }
 
@@ -452,18 +453,20 @@ PYBIND11_MODULE(knitsim, m) {
   m.def(
       "relax",
       [](std::string pattern, std::optional<int> rows, std::optional<int> cols,
-         std::optional<bool> in_the_round, double max_time, double rest, double stitch_size,
-         double shrink, int segments_per_stitch, const py::object& params, const std::string& out,
-         bool overwrite, bool progress, const py::object& resume, bool fire, double residual,
-         std::optional<bool> bind_off, std::optional<bool> cast_on, double contact_reuse_widen,
-         double contact_reuse_widen_residual) {
+         std::optional<bool> in_the_round, double max_time, std::optional<double> rest,
+         double stitch_size, double shrink, int segments_per_stitch, const py::object& params,
+         const std::string& out, bool overwrite, bool progress, const py::object& resume,
+         std::optional<bool> fire, std::optional<double> residual, std::optional<bool> bind_off,
+         std::optional<bool> cast_on, std::optional<double> contact_reuse_widen,
+         std::optional<double> contact_reuse_widen_residual) {
         RelaxKnitOptions o;
         // resume: a State, or a .kstate path whose knit block gives the defaults (as
-        // `knitsim relax --resume FILE`)
+        // `knitsim relax --resume FILE`): the knit, and how it was being relaxed
         std::optional<StateFile> resume_file;
         if (py::isinstance<py::str>(resume)) {
           resume_file = read_state_file(resume.cast<std::string>());
           if (const auto& info = resume_file->knit) {
+            if (info->relaxation) apply_relax_settings(*info->relaxation, o);
             if (!rows) rows = info->rows;
             if (!cols) cols = info->cols;
             if (!in_the_round) in_the_round = info->in_the_round;
@@ -494,11 +497,12 @@ PYBIND11_MODULE(knitsim, m) {
         o.shrink = shrink;
         o.params = params_over(o.params, params, "relax");
         o.run.max_time = max_time;
-        o.run.ke_per_length = rest;
-        o.run.force_residual = residual;
-        o.run.contact_reuse_widen = contact_reuse_widen;
-        o.run.contact_reuse_widen_residual = contact_reuse_widen_residual;
-        o.fire = fire;
+        if (rest) o.run.ke_per_length = *rest;
+        if (residual) o.run.force_residual = *residual;
+        if (contact_reuse_widen) o.run.contact_reuse_widen = *contact_reuse_widen;
+        if (contact_reuse_widen_residual)
+          o.run.contact_reuse_widen_residual = *contact_reuse_widen_residual;
+        if (fire) o.fire = *fire;
         o.run.out_dir = out;
         o.run.overwrite = overwrite;
         o.run.progress = progress;
@@ -514,25 +518,28 @@ PYBIND11_MODULE(knitsim, m) {
         return k;
       },
       "pattern"_a = "", "rows"_a = py::none(), "cols"_a = py::none(), "in_the_round"_a = py::none(),
-      "max_time"_a = 2.0, "rest"_a = 1e-5, "stitch_size"_a = 0.0, "shrink"_a = RELAX_SHRINK,
+      "max_time"_a = 2.0, "rest"_a = py::none(), "stitch_size"_a = 0.0, "shrink"_a = RELAX_SHRINK,
       "segments_per_stitch"_a = 8, "params"_a = py::none(), "out"_a = "", "overwrite"_a = false,
-      "progress"_a = false, "resume"_a = py::none(), "fire"_a = false, "residual"_a = 0.0,
-      "bind_off"_a = py::none(), "cast_on"_a = py::none(), "contact_reuse_widen"_a = 1.0,
-      "contact_reuse_widen_residual"_a = 20.0,
+      "progress"_a = false, "resume"_a = py::none(), "fire"_a = py::none(),
+      "residual"_a = py::none(), "bind_off"_a = py::none(), "cast_on"_a = py::none(),
+      "contact_reuse_widen"_a = py::none(), "contact_reuse_widen_residual"_a = py::none(),
       "Generates `pattern` (stockinette, garter, rib2x2, seed, … a chart file or a knitout "
       "program) at rows × cols (default 12 × 12, or the program's size) and relaxes it until it "
-      "rests (kinetic energy per length below `rest` erg/cm, or with `residual` > 0 the force "
-      "residual below `residual` cm/s²) or `max_time` s of simulated time. `fire`: relax by "
-      "minimisation (FIRE; rest by the force residual, 1 cm/s² unless `residual` says). "
-      "`bind_off`: tie the last row's loops to the row below (a sewn bind-off); `cast_on`: "
-      "tie the second row's loops to the first (a cast-on). `resume`: go on from a "
-      "knitsim.State of the same knit, or from a .kstate path, whose knit (size, flat or "
-      "round, bind-off, cast-on) is then the default and is checked. "
-      "`params`: a dict of scene parameters over the relaxation's. `contact_reuse_widen` "
-      "(with params contact_reuse and the imex-contact integrator): widen the reuse distance "
-      "up to this factor while the force residual is above `contact_reuse_widen_residual` "
-      "cm/s² (`knitsim relax --contact-reuse-widen`). With `out`, writes the run "
-      "as `knitsim relax --out` does. Returns a Knit.");
+      "rests (kinetic energy per length below `rest` erg/cm, default 1e-5, or with `residual` "
+      "> 0 the force residual below `residual` cm/s²) or `max_time` s of simulated time. "
+      "`fire`: relax by minimisation (FIRE; rest by the force residual, 1 cm/s² unless "
+      "`residual` says). `bind_off`: tie the last row's loops to the row below (a sewn "
+      "bind-off); `cast_on`: tie the second row's loops to the first (a cast-on). `resume`: "
+      "go on from a knitsim.State of the same knit, or from a .kstate path, whose knit (size, "
+      "flat or round, bind-off, cast-on) is then the default and is checked, and whose "
+      "relaxation (fire, the solver's parameters, damping, rest test, widening; the file's "
+      "knit['relaxation']) goes on as it went unless these arguments or `params` say "
+      "otherwise. `params`: a dict of scene parameters over the relaxation's. "
+      "`contact_reuse_widen` (with params contact_reuse and the imex-contact integrator): widen "
+      "the reuse distance up to this factor (default 1: none) while the force residual is "
+      "above `contact_reuse_widen_residual` cm/s² (default 20; `knitsim relax "
+      "--contact-reuse-widen`). With `out`, writes the run as `knitsim relax --out` does. "
+      "Returns a Knit.");
 
   // ------------------------------------------------------------- files
   py::class_<StateFile>(m, "StateFile", "A .kstate file's contents.")

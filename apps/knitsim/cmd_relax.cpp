@@ -42,8 +42,9 @@ void register_relax(CLI::App& app) {
                   "relax yarns imported from a .yarns, .bcc or .obj file instead of a pattern");
   cmd->add_option("--resume", o->resume,
                   "go on relaxing from a state written by an earlier `relax` (its relaxed.kstate "
-                  "or a frame); its pattern, size and options are the defaults; --max-time is "
-                  "then added")
+                  "or a frame); its pattern, size and options are the defaults — the knit's, "
+                  "and how it was being relaxed: --fire, the integrator, time step, contact "
+                  "options, damping and rest test; --max-time is then added")
       ->check(CLI::ExistingFile);
   cmd->add_option(
          "--scale", o->yarns.import.scale,
@@ -122,9 +123,10 @@ void register_relax(CLI::App& app) {
                   "the force-residual test instead of --ke-threshold (default with --fire: " +
                       knit::short_number(knit::RELAX_FIRE_RESIDUAL) + ")")
       ->check(finite_positive(1e12));
-  cmd->add_flag("--fire", o->fire,
+  cmd->add_flag("--fire,!--no-fire", o->fire,
                 "relax by minimisation (FIRE) instead of damped dynamics: no global or non-rigid "
-                "damping, the motion steered downhill; rest by the force residual");
+                "damping, the motion steered downhill; rest by the force residual (--no-fire: "
+                "damped dynamics, where a resumed state was relaxed with --fire)");
   cmd->add_option("--check-every", o->run.check_every, "steps between rest checks and states")
       ->check(CLI::Range(1, 1'000'000'000));
   add_threads_option(cmd, o->threads);
@@ -133,6 +135,7 @@ void register_relax(CLI::App& app) {
   add_export_option(cmd, o->export_format);
   cmd->callback([o, cmd]() {
     auto given = [&](const char* name) { return cmd->count(name) > 0; };
+    bool fire_from_state = false;  // --fire not given, but the resumed state was so relaxed
     if (!o->resume.empty() && o->from.empty()) {
       // a state written by `relax` says what it is: the knit's options default to its own
       const knit::StateFile f = knit::read_state_file(o->resume);
@@ -147,6 +150,30 @@ void register_relax(CLI::App& app) {
         if (!given("--bind-off")) o->knit.knit.bind_off = f.knit->bind_off;
         if (!given("--cast-on")) o->knit.knit.cast_on = f.knit->cast_on;
         if (!given("--shrink")) o->shrink = f.knit->shrink;
+        // and the relaxation goes on as it went (method, solver, rest test), unless told
+        if (f.knit->relaxation) {
+          const knit::KnitRelaxSettings& s = *f.knit->relaxation;
+          fire_from_state = s.fire && !given("--fire");
+          if (!given("--fire")) o->fire = s.fire;
+          if (!given("--integrator")) o->integrator = knit::integrator_name(s.integrator);
+          if (!given("--time-step")) o->time_step = s.time_step;
+          if (!given("--implicit-bending")) o->implicit_bending = s.implicit_bending;
+          if (!given("--contact-solve-tolerance"))
+            o->contact_solve_tolerance = s.contact_solve_tolerance;
+          if (!given("--contact-reuse")) o->contact_reuse = s.contact_reuse;
+          if (!given("--max-step-halvings")) o->max_step_halvings = s.max_step_halvings;
+          if (!given("--contact-points")) o->contact_points = s.contact_points;
+          if (!given("--end-mass-floor")) o->end_mass_floor = s.end_mass_floor;
+          if (!given("--k-global")) o->material.k_global = s.k_global;
+          if (!given("--alpha-small")) o->material.alpha_small = s.alpha_small;
+          if (!given("--alpha-large")) o->material.alpha_large = s.alpha_large;
+          if (!given("--ke-threshold")) o->run.ke_per_length = s.ke_per_length;
+          if (!given("--residual")) o->run.force_residual = s.force_residual;
+          if (!given("--check-every")) o->run.check_every = s.check_every;
+          if (!given("--contact-reuse-widen")) o->run.contact_reuse_widen = s.contact_reuse_widen;
+          if (!given("--contact-reuse-widen-residual"))
+            o->run.contact_reuse_widen_residual = s.contact_reuse_widen_residual;
+        }
       } else if (o->pattern.empty()) {
         throw std::invalid_argument("--resume " + o->resume +
                                     ": the file does not say which knit it holds (written "
@@ -160,8 +187,12 @@ void register_relax(CLI::App& app) {
         throw std::invalid_argument("--fire: relaxes knit patterns only, not yarns --from a file");
       for (const char* damping : {"--k-global", "--alpha-small", "--alpha-large"})
         if (given(damping))
-          throw std::invalid_argument(std::string(damping) +
-                                      ": a FIRE relaxation (--fire) has no damping to set");
+          throw std::invalid_argument(
+              std::string(damping) + ": a FIRE relaxation (--fire) has no damping to set" +
+              (fire_from_state ? std::string(" (--resume ") + o->resume +
+                                     " was relaxed with --fire; --no-fire goes on by damped "
+                                     "dynamics)"
+                               : std::string()));
     }
     if (o->resume.empty() && knit::is_knitout_path(o->pattern)) {
       // a knitting-machine program knits what it says: its size is the default

@@ -110,10 +110,11 @@ void add_integrator_option(CLI::App* cmd, std::string& integrator) {
 }
 
 void add_implicit_bending_option(CLI::App* cmd, bool& implicit_bending) {
-  cmd->add_flag("--implicit-bending", implicit_bending,
+  cmd->add_flag("--implicit-bending,!--no-implicit-bending", implicit_bending,
                 "with --integrator imex or imex-contact: the bending energy implicit too (its "
                 "stiffness in the solve), which lifts the time-step limit bending sets "
-                "(docs/model.md §5.2)");
+                "(docs/model.md §5.2; --no-implicit-bending: explicit, where a resumed "
+                "relaxation had it)");
 }
 
 void add_end_mass_floor_option(CLI::App* cmd, double& floor) {

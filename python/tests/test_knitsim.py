@@ -325,3 +325,25 @@ def test_ctrl_c_ends_a_relaxation_after_a_step(tmp_path):
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"] == "interrupted"
     assert (out / "final.kstate").exists()
+
+
+def test_resume_goes_on_as_the_relaxation_went(tmp_path):
+    # a FIRE relaxation's state says how it was relaxing; resumed from its path alone it
+    # goes on the same way, step for step as naming everything again; an argument wins
+    params = {"integrator": "imex-contact", "time_step": 6e-4, "contact_reuse": 0.05}
+    knitsim.relax("garter", rows=3, cols=3, max_time=0.015, fire=True, params=params,
+                  contact_reuse_widen=2.0, out=str(tmp_path / "a"))
+    first = str(tmp_path / "a" / "final.kstate")
+    relaxation = knitsim.read_state(first).knit["relaxation"]
+    assert relaxation["fire"] is True and relaxation["integrator"] == "imex-contact"
+    assert relaxation["time_step"] == 6e-4 and relaxation["contact_reuse_widen"] == 2.0
+    alone = knitsim.relax(resume=first, max_time=0.015)
+    named = knitsim.relax("garter", rows=3, cols=3, resume=first, max_time=0.015, fire=True,
+                          params=params, contact_reuse_widen=2.0)
+    assert alone.summary["method"] == "fire" and alone.summary["steps"] == 25
+    assert alone.summary["params"]["solver"]["integrator"] == "imex-contact"
+    assert np.array_equal(alone.state.q, named.state.q)
+    damped = knitsim.relax(resume=first, max_time=0.015, fire=False)
+    assert damped.summary["method"] == "damped_dynamics"
+    other = knitsim.relax(resume=first, max_time=0.006, params={"time_step": 5e-4})
+    assert other.summary["params"]["solver"]["time_step"] == 5e-4

@@ -502,6 +502,67 @@ TEST(Cli, ResumeTakesTheKnitFromTheStateFile) {
   EXPECT_EQ(nlohmann::json::parse(in)["rows"], 3);
 }
 
+// A relaxation's states say how it was relaxing: --resume alone goes on the same way (the
+// method, integrator, time step, contact reuse and its widening, rest test), step for
+// step as repeating every option does; an option given wins; --no-fire goes on by damped
+// dynamics, and damping asked of a resumed FIRE relaxation is refused naming --no-fire.
+TEST(Cli, ResumeGoesOnAsTheRelaxationWent) {
+  const std::string dir = temp_dir("cli_resume_solver");
+  const std::string solver =
+      " --fire --integrator imex-contact --time-step 6e-4 --contact-reuse 0.05 "
+      "--contact-reuse-widen 2 --contact-reuse-widen-residual 10 --check-every 25";
+  const std::string opts = " --quiet --no-frames --threads 1 --max-time 0.015";
+  ASSERT_EQ(run("relax garter --rows 3 --cols 3" + solver + opts + " --out " + dir + "/first").code,
+            0);
+  const std::string first = dir + "/first/final.kstate";
+  const Result alone = run("relax --resume " + first + opts + " --out " + dir + "/alone");
+  ASSERT_EQ(alone.code, 0) << alone.output;
+  const Result named = run("relax garter --rows 3 --cols 3 --resume " + first + solver + opts +
+                           " --out " + dir + "/named");
+  ASSERT_EQ(named.code, 0) << named.output;
+  const knit::StateFile a = knit::read_state_file(dir + "/alone/final.kstate");
+  const knit::StateFile b = knit::read_state_file(dir + "/named/final.kstate");
+  EXPECT_EQ(a.state.time, b.state.time);
+  EXPECT_TRUE(a.state.q == b.state.q);
+  EXPECT_TRUE(a.state.v == b.state.v);
+  auto summary = [&](const std::string& name) {
+    std::ifstream in(dir + "/" + name + "/summary.json");
+    return nlohmann::json::parse(in);
+  };
+  const nlohmann::json s = summary("alone");
+  EXPECT_EQ(s["method"], "fire");
+  EXPECT_EQ(s["rest_test"], "residual");
+  EXPECT_EQ(s["steps"], 25);  // 0.015 s at 6e-4 s, not at 1/11800 s
+  EXPECT_EQ(s["params"]["solver"]["integrator"], "imex-contact");
+  EXPECT_EQ(s["params"]["solver"]["time_step"], 6e-4);
+  EXPECT_EQ(s["params"]["solver"]["contact_reuse"], 0.05);
+  EXPECT_EQ(s["contact_reuse_widen"]["max"], 2.0);
+  EXPECT_EQ(s["contact_reuse_widen"]["residual"], 10.0);
+  // and its own states say so in turn
+  ASSERT_TRUE(a.knit && a.knit->relaxation);
+  EXPECT_TRUE(a.knit->relaxation->fire);
+  EXPECT_EQ(a.knit->relaxation->check_every, 25);
+  // an option given wins over the file's
+  ASSERT_EQ(
+      run("relax --resume " + first + " --time-step 5e-4" + opts + " --out " + dir + "/step").code,
+      0);
+  EXPECT_EQ(summary("step")["params"]["solver"]["time_step"], 5e-4);
+  EXPECT_EQ(summary("step")["method"], "fire");
+  ASSERT_EQ(run("relax --resume " + first + " --no-fire --k-global 1" + opts + " --out " + dir +
+                "/damped")
+                .code,
+            0);
+  EXPECT_EQ(summary("damped")["method"], "damped_dynamics");
+  EXPECT_EQ(summary("damped")["k_global"], 1.0);
+  EXPECT_EQ(summary("damped")["params"]["solver"]["integrator"], "imex-contact");
+  const Result damping =
+      run("relax --resume " + first + " --k-global 1" + opts + " --out " + dir + "/refused");
+  EXPECT_EQ(damping.code, 1);
+  EXPECT_NE(damping.output.find("--k-global"), std::string::npos) << damping.output;
+  EXPECT_NE(damping.output.find("--no-fire"), std::string::npos) << damping.output;
+  EXPECT_FALSE(fs::exists(dir + "/refused"));
+}
+
 // --bind-off and --cast-on: the state file says the knit is bound off (cast on) and holds
 // its ties (two per loop of the last row, or of the second); --resume keeps them unless
 // told otherwise, the flag on a state knitted without is refused, and so is the flag on a

@@ -4,6 +4,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <limits>
 
 #include "fd_check.hpp"
 #include "knit/recipes/relax_knit.hpp"
@@ -113,6 +114,85 @@ TEST(StateFile, KnitRoundTrips) {
     EXPECT_THROW(read_state_file(path), std::runtime_error) << cut;
     write_state_file(path, make_state_file(m, r.state));
   }
+}
+
+// a relaxation's states say how it was relaxing (what `relax --resume` goes on with),
+// field for field; a file without that block reads as none, and a hand-edited value out of
+// its option's range is refused naming the key
+TEST(StateFile, RelaxationSettingsRoundTrip) {
+  const std::string path = ::testing::TempDir() + "/relax_settings.kstate";
+  RelaxKnitOptions o;
+  o.knit.rows = 3;
+  o.knit.cols = 3;
+  o.fire = true;
+  o.params.solver.integrator = Integrator::IMEX_CONTACT;
+  o.params.solver.time_step = 6e-4;
+  o.params.solver.implicit_bending = true;
+  o.params.solver.contact_solve_tolerance = 0.01;
+  o.params.solver.contact_reuse = 0.05;
+  o.params.solver.max_step_halvings = 3;
+  o.params.discretisation.contact_points = 7;
+  o.params.discretisation.end_mass_floor = 0.5;
+  o.params.material.k_global = 0.4;
+  o.params.material.alpha_small = 0.2;
+  o.params.material.alpha_large = 0.1;
+  o.run.ke_per_length = 3e-6;
+  o.run.force_residual = 0.5;
+  o.run.check_every = 25;
+  o.run.contact_reuse_widen = 2;
+  o.run.contact_reuse_widen_residual = 10;
+  const KnitRelaxation r = setup_knit_relaxation("garter", o);
+  write_state_file(path, make_state_file(r.sim->model(), r.state));
+  const StateFile g = read_state_file(path);
+  ASSERT_TRUE(g.knit && g.knit->relaxation);
+  RelaxKnitOptions back;
+  apply_relax_settings(*g.knit->relaxation, back);
+  EXPECT_EQ(to_json(relax_settings(back)), to_json(relax_settings(o)));
+  EXPECT_TRUE(back.fire);
+  EXPECT_EQ(back.params.solver.integrator, Integrator::IMEX_CONTACT);
+  EXPECT_EQ(back.params.solver.time_step, 6e-4);
+  EXPECT_EQ(back.params.discretisation.contact_points, 7);
+  EXPECT_EQ(back.params.material.k_global, 0.4);  // as asked (the FIRE model runs with none)
+  EXPECT_EQ(r.sim->model().params.material.k_global, 0.0);
+  EXPECT_EQ(back.run.check_every, 25);
+  EXPECT_EQ(back.run.contact_reuse_widen_residual, 10.0);
+  // a knit written without the block (an earlier build, or by hand)
+  StateFile plain = g;
+  plain.knit->relaxation.reset();
+  write_state_file(path, plain);
+  EXPECT_FALSE(read_state_file(path).knit->relaxation.has_value());
+  // out of range, of the wrong type, or missing: refused naming the key and the file
+  auto refused = [&](KnitRelaxSettings bad, const std::string& key) {
+    StateFile f = g;
+    f.knit->relaxation = bad;
+    write_state_file(path, f);
+    try {
+      read_state_file(path);
+      ADD_FAILURE() << "accepted a bad " << key;
+    } catch (const std::runtime_error& e) {
+      const std::string msg = e.what();
+      EXPECT_NE(msg.find(path), std::string::npos) << msg;
+      EXPECT_NE(msg.find("relaxation." + key), std::string::npos) << msg;
+    }
+  };
+  KnitRelaxSettings bad = *g.knit->relaxation;
+  bad.time_step = -1;
+  refused(bad, "time_step");
+  bad = *g.knit->relaxation;
+  bad.time_step = std::numeric_limits<double>::quiet_NaN();
+  refused(bad, "time_step");
+  bad = *g.knit->relaxation;
+  bad.check_every = 0;
+  refused(bad, "check_every");
+  bad = *g.knit->relaxation;
+  bad.contact_reuse_widen = 0.5;
+  refused(bad, "contact_reuse_widen");
+  bad = *g.knit->relaxation;
+  bad.contact_points = 65;
+  refused(bad, "contact_points");
+  bad = *g.knit->relaxation;
+  bad.alpha_small = 2;
+  refused(bad, "alpha_small");
 }
 
 // files written before the knit block existed (version 1) are still read

@@ -35,7 +35,96 @@ uint32_t checksum(std::string_view bytes) {
   return static_cast<uint32_t>(crc);
 }
 
+// the settings a relaxation wrote, each within the range its option takes; throws
+// std::invalid_argument naming the key
+KnitRelaxSettings parse_relaxation(const nlohmann::json& j) {
+  if (!j.is_object()) throw std::invalid_argument("relaxation: not a JSON object");
+  auto value = [&](const char* key) -> const nlohmann::json& {
+    if (!j.contains(key))
+      throw std::invalid_argument(std::string("relaxation.") + key + ": missing");
+    return j.at(key);
+  };
+  auto fail = [](const char* key, const std::string& what) {
+    throw std::invalid_argument(std::string("relaxation.") + key + ": " + what);
+  };
+  auto boolean = [&](const char* key) {
+    if (!value(key).is_boolean()) fail(key, "not true or false");
+    return value(key).get<bool>();
+  };
+  auto number = [&](const char* key) {
+    if (!value(key).is_number() || !std::isfinite(value(key).get<double>()))
+      fail(key, "not a finite number");
+    return value(key).get<double>();
+  };
+  auto param = [&](const char* key, double v) {  // within the parameter's range (params.hpp)
+    try {
+      check_param(key, v);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(std::string("relaxation.") + e.what());
+    }
+    return v;
+  };
+  auto integer_param = [&](const char* key) {
+    if (!value(key).is_number_integer()) fail(key, "not an integer");
+    return static_cast<int>(param(key, static_cast<double>(value(key).get<long long>())));
+  };
+  auto at_least = [&](const char* key, double min, bool strict) {
+    const double v = number(key);
+    if (strict ? !(v > min) : !(v >= min))
+      fail(key, short_number(v) + " is " + (strict ? "not above " : "below ") + short_number(min));
+    return v;
+  };
+  KnitRelaxSettings s;
+  s.fire = boolean("fire");
+  if (!value("integrator").is_string()) fail("integrator", "not a string");
+  try {
+    s.integrator = parse_integrator(value("integrator").get<std::string>());
+  } catch (const std::invalid_argument& e) {
+    fail("integrator", e.what());
+  }
+  s.time_step = param("time_step", number("time_step"));
+  s.implicit_bending = boolean("implicit_bending");
+  s.contact_solve_tolerance = param("contact_solve_tolerance", number("contact_solve_tolerance"));
+  s.contact_reuse = param("contact_reuse", number("contact_reuse"));
+  s.max_step_halvings = integer_param("max_step_halvings");
+  s.contact_points = integer_param("contact_points");
+  s.end_mass_floor = param("end_mass_floor", number("end_mass_floor"));
+  s.k_global = param("k_global", number("k_global"));
+  s.alpha_small = param("alpha_small", number("alpha_small"));
+  s.alpha_large = param("alpha_large", number("alpha_large"));
+  s.ke_per_length = at_least("ke_per_length", 0, true);
+  s.force_residual = at_least("force_residual", 0, false);
+  if (!value("check_every").is_number_integer()) fail("check_every", "not an integer");
+  const long long every = value("check_every").get<long long>();
+  if (every < 1 || every > 1'000'000'000)
+    fail("check_every", std::to_string(every) + " is outside 1 to 1000000000 steps");
+  s.check_every = static_cast<int>(every);
+  s.contact_reuse_widen = at_least("contact_reuse_widen", 1, false);
+  s.contact_reuse_widen_residual = at_least("contact_reuse_widen_residual", 0, true);
+  return s;
+}
+
 }  // namespace
+
+nlohmann::json to_json(const KnitRelaxSettings& s) {
+  return {{"fire", s.fire},
+          {"integrator", integrator_name(s.integrator)},
+          {"time_step", s.time_step},
+          {"implicit_bending", s.implicit_bending},
+          {"contact_solve_tolerance", s.contact_solve_tolerance},
+          {"contact_reuse", s.contact_reuse},
+          {"max_step_halvings", s.max_step_halvings},
+          {"contact_points", s.contact_points},
+          {"end_mass_floor", s.end_mass_floor},
+          {"k_global", s.k_global},
+          {"alpha_small", s.alpha_small},
+          {"alpha_large", s.alpha_large},
+          {"ke_per_length", s.ke_per_length},
+          {"force_residual", s.force_residual},
+          {"check_every", s.check_every},
+          {"contact_reuse_widen", s.contact_reuse_widen},
+          {"contact_reuse_widen_residual", s.contact_reuse_widen_residual}};
+}
 
 int StateFile::num_cp() const {
   int n = 0;
@@ -126,17 +215,17 @@ void write_state_file(const std::string& path, const StateFile& f) {
   if (f.knit) {
     if (static_cast<int>(f.rest_length.size()) != f.num_seg())
       throw std::invalid_argument(path + ": rest lengths do not match the segments");
-    const std::string info = nlohmann::json{
-        {"pattern", f.knit->pattern},
-        {"rows", f.knit->rows},
-        {"cols", f.knit->cols},
-        {"in_the_round", f.knit->in_the_round},
-        {"segments_per_stitch", f.knit->segments_per_stitch},
-        {"stitch_size_cm", f.knit->stitch_size_cm},
-        {"shrink", f.knit->shrink},
-        {"bind_off", f.knit->bind_off},
-        {"cast_on",
-         f.knit->cast_on}}.dump();
+    nlohmann::json knit = {{"pattern", f.knit->pattern},
+                           {"rows", f.knit->rows},
+                           {"cols", f.knit->cols},
+                           {"in_the_round", f.knit->in_the_round},
+                           {"segments_per_stitch", f.knit->segments_per_stitch},
+                           {"stitch_size_cm", f.knit->stitch_size_cm},
+                           {"shrink", f.knit->shrink},
+                           {"bind_off", f.knit->bind_off},
+                           {"cast_on", f.knit->cast_on}};
+    if (f.knit->relaxation) knit["relaxation"] = to_json(*f.knit->relaxation);
+    const std::string info = knit.dump();
     put<uint32_t>(out, static_cast<uint32_t>(info.size()));
     out.append(info);
     for (double l : f.rest_length) put<double>(out, l);
@@ -233,6 +322,8 @@ StateFile read_state_file(const std::string& path) {
       k.shrink = info.at("shrink").get<double>();
       k.bind_off = info.value("bind_off", false);  // written since bind-offs exist
       k.cast_on = info.value("cast_on", false);    // and since cast-ons exist
+      // and how it was being relaxed, since `relax --resume` goes on that way
+      if (info.contains("relaxation")) k.relaxation = parse_relaxation(info.at("relaxation"));
     } catch (const std::exception& e) {
       r.fail(std::string("bad knit description: ") + e.what());
     }

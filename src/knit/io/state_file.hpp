@@ -12,7 +12,8 @@
 //   if knit: u32 n | n bytes of JSON (pattern, rows, cols, in_the_round,
 //            segments_per_stitch, stitch_size_cm, shrink, bind_off, cast_on; bind_off
 //            and cast_on are absent from files written before they existed and read as
-//            false)
+//            false; "relaxation", an object with KnitRelaxSettings' fields by name and the
+//            integrator by its option name, when a relaxation wrote the file)
 //            f64 rest_length[num_seg] (cm)
 //            u32 num_glues | per glue: i32 segment a, f64 t a, i32 segment b, f64 t b,
 //                                      f64 gap[3] (cm), f64 close_time (s)
@@ -20,6 +21,7 @@
 //   u32 CRC-32 (zlib) of every byte before it (version 3)
 // Versions 1 (no knit block) and 2 (no checksum) are still read. Positions, velocities
 // and the time must be finite; a version 3 file whose checksum does not match is refused.
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
@@ -45,6 +47,10 @@ struct StateFile {
 };
 
 inline constexpr unsigned STATE_FILE_VERSION = 3;
+
+/// A relaxation's settings as the knit block writes them (by field name; the integrator by
+/// its option name).
+nlohmann::json to_json(const KnitRelaxSettings& settings);
 
 /// Snapshot of a model's layout with the given state.
 StateFile make_state_file(const Model& model, const State& state);

@@ -105,6 +105,28 @@ struct Clamp {
   }
 };
 
+/// How a generated knit was being relaxed when a state of it was written: the relax
+/// recipe's solver and rest-test settings (RelaxKnitOptions), so that `relax --resume`
+/// goes on the same way unless told otherwise.
+struct KnitRelaxSettings {
+  bool fire = false;  ///< minimisation (FIRE) instead of damped dynamics
+  Integrator integrator = Integrator::EXPLICIT;
+  double time_step = 0;  ///< s
+  bool implicit_bending = false;
+  double contact_solve_tolerance = 0;
+  double contact_reuse = 0;  ///< yarn radii
+  int max_step_halvings = 0;
+  int contact_points = 0;     ///< per segment
+  double end_mass_floor = 0;  ///< of an interior control point's mass
+  double k_global = 0;        ///< g/s, as asked (a FIRE relaxation runs with none)
+  double alpha_small = 0, alpha_large = 0;
+  double ke_per_length = 0;   ///< erg/cm: the kinetic-energy rest threshold
+  double force_residual = 0;  ///< cm/s²: the force-residual rest threshold (0: the method's)
+  int check_every = 0;        ///< steps between rest checks
+  double contact_reuse_widen = 1;
+  double contact_reuse_widen_residual = 0;  ///< cm/s²
+};
+
 /// Where a model's yarn came from when it is a generated knit: enough to rebuild the same
 /// knit or to go on relaxing it (written into .kstate files with the rest lengths and
 /// glues).
@@ -117,6 +139,8 @@ struct KnitInfo {
   double shrink = 1;          ///< rest-length factor c the model was built with
   bool bind_off = false;      ///< the last row is bound off (KnitOptions::bind_off)
   bool cast_on = false;       ///< the first row is cast on (KnitOptions::cast_on)
+  /// How it was being relaxed (set by the relax recipe; absent in files written before)
+  std::optional<KnitRelaxSettings> relaxation;
 };
 
 class ConstraintGroup;

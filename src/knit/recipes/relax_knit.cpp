@@ -180,6 +180,50 @@ State read_resumed_knit_state(const std::string& path, const std::string& patter
   return f.state;
 }
 
+KnitRelaxSettings relax_settings(const RelaxKnitOptions& o) {
+  KnitRelaxSettings s;
+  s.fire = o.fire;
+  const SolverSettings& solver = o.params.solver;
+  s.integrator = solver.integrator;
+  s.time_step = solver.time_step;
+  s.implicit_bending = solver.implicit_bending;
+  s.contact_solve_tolerance = solver.contact_solve_tolerance;
+  s.contact_reuse = solver.contact_reuse;
+  s.max_step_halvings = solver.max_step_halvings;
+  s.contact_points = o.params.discretisation.contact_points;
+  s.end_mass_floor = o.params.discretisation.end_mass_floor;
+  s.k_global = o.params.material.k_global;
+  s.alpha_small = o.params.material.alpha_small;
+  s.alpha_large = o.params.material.alpha_large;
+  s.ke_per_length = o.run.ke_per_length;
+  s.force_residual = o.run.force_residual;
+  s.check_every = o.run.check_every;
+  s.contact_reuse_widen = o.run.contact_reuse_widen;
+  s.contact_reuse_widen_residual = o.run.contact_reuse_widen_residual;
+  return s;
+}
+
+void apply_relax_settings(const KnitRelaxSettings& s, RelaxKnitOptions& o) {
+  o.fire = s.fire;
+  SolverSettings& solver = o.params.solver;
+  solver.integrator = s.integrator;
+  solver.time_step = s.time_step;
+  solver.implicit_bending = s.implicit_bending;
+  solver.contact_solve_tolerance = s.contact_solve_tolerance;
+  solver.contact_reuse = s.contact_reuse;
+  solver.max_step_halvings = s.max_step_halvings;
+  o.params.discretisation.contact_points = s.contact_points;
+  o.params.discretisation.end_mass_floor = s.end_mass_floor;
+  o.params.material.k_global = s.k_global;
+  o.params.material.alpha_small = s.alpha_small;
+  o.params.material.alpha_large = s.alpha_large;
+  o.run.ke_per_length = s.ke_per_length;
+  o.run.force_residual = s.force_residual;
+  o.run.check_every = s.check_every;
+  o.run.contact_reuse_widen = s.contact_reuse_widen;
+  o.run.contact_reuse_widen_residual = s.contact_reuse_widen_residual;
+}
+
 KnitRelaxation setup_knit_relaxation(const std::string& pattern_name, const RelaxKnitOptions& o) {
   validate_params(o.params);
   validate_relax_options(o.run, o.params.solver);
@@ -198,7 +242,8 @@ KnitRelaxation setup_knit_relaxation(const std::string& pattern_name, const Rela
                         o.knit.stitch_size_cm,
                         o.shrink,
                         o.knit.bind_off,
-                        o.knit.cast_on};
+                        o.knit.cast_on,
+                        relax_settings(o)};
   r.state = o.resume ? *o.resume : generated_state(r.knit);
   if (r.state.q.size() != model.num_dof() || r.state.v.size() != model.num_dof())
     throw std::invalid_argument("the state to resume from does not match the knit's size");

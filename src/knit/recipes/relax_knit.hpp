@@ -123,6 +123,13 @@ RelaxResult relax_knit(const std::string& pattern, const RelaxKnitOptions& optio
 State read_resumed_knit_state(const std::string& path, const std::string& pattern,
                               const KnitOptions& options);
 
+/// The options of `o` that say how a knit is relaxed (method, solver settings, damping
+/// asked for, rest test, contact-reuse widening), as every state of the relaxation records
+/// them (KnitInfo::relaxation); apply_relax_settings sets them back into `o` (the knit,
+/// the run's time limit and outputs are left as they are).
+KnitRelaxSettings relax_settings(const RelaxKnitOptions& o);
+void apply_relax_settings(const KnitRelaxSettings& s, RelaxKnitOptions& o);
+
 /// The parameters `relax_yarns` uses unless told otherwise: the relaxation column with
 /// gravity off and the table's k_global = 1.5 (imported yarns have no stitch coordinates,
 /// hence no non-rigid damping), h = 1/25000 s (imported swatches start tightly packed).

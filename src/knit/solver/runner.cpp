@@ -177,7 +177,10 @@ bool truncate_log_after(const std::filesystem::path& path, double time,
 double frame_bytes(const Model& model) {
   double b = 64 + 12.0 * model.yarns.size() + 48.0 * model.num_cp();
   if (model.has_stitches()) b += 8.0 * model.num_seg();
-  if (model.knit) b += 512 + 8.0 * model.num_seg() + 56.0 * model.glues.size();
+  // (the knit's description, with its relaxation's settings, is about 550 bytes of JSON)
+  if (model.knit)
+    b += 1024 + static_cast<double>(model.knit->pattern.size()) + 8.0 * model.num_seg() +
+         56.0 * model.glues.size();
   return b;
 }
 
