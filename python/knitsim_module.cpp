@@ -496,6 +496,19 @@ PYBIND11_MODULE(knitsim, m) {
         o.knit.cast_on = cast_on.value_or(false);
         o.shrink = shrink;
         o.params = params_over(o.params, params, "relax");
+        if (resume_file && resume_file->knit && resume_file->knit->relaxation) {
+          // the file's contact reuse goes with its integrator when params ask for another,
+          // and its widening with the reuse (as `knitsim relax --resume`)
+          const bool named = py::isinstance<py::dict>(params);
+          auto in_params = [&](const char* key) {
+            return named && params.cast<py::dict>().contains(key);
+          };
+          if (in_params("integrator") && !in_params("contact_reuse") &&
+              o.params.solver.integrator != Integrator::IMEX_CONTACT)
+            o.params.solver.contact_reuse = 0;
+          if (o.params.solver.contact_reuse == 0 && !contact_reuse_widen)
+            o.run.contact_reuse_widen = 1;
+        }
         o.run.max_time = max_time;
         if (rest) o.run.ke_per_length = *rest;
         if (residual) o.run.force_residual = *residual;

@@ -173,6 +173,12 @@ void register_relax(CLI::App& app) {
           if (!given("--contact-reuse-widen")) o->run.contact_reuse_widen = s.contact_reuse_widen;
           if (!given("--contact-reuse-widen-residual"))
             o->run.contact_reuse_widen_residual = s.contact_reuse_widen_residual;
+          // the file's contact reuse goes with its integrator when another is asked for,
+          // and its widening with the reuse
+          if (given("--integrator") && o->integrator != "imex-contact" && !given("--contact-reuse"))
+            o->contact_reuse = 0;
+          if (o->contact_reuse == 0 && !given("--contact-reuse-widen"))
+            o->run.contact_reuse_widen = 1;
         }
       } else if (o->pattern.empty()) {
         throw std::invalid_argument("--resume " + o->resume +

@@ -347,3 +347,7 @@ def test_resume_goes_on_as_the_relaxation_went(tmp_path):
     assert damped.summary["method"] == "damped_dynamics"
     other = knitsim.relax(resume=first, max_time=0.006, params={"time_step": 5e-4})
     assert other.summary["params"]["solver"]["time_step"] == 5e-4
+    # another integrator leaves the file's contact reuse (imex-contact's) and its widening
+    imex = knitsim.relax(resume=first, max_time=0.006, params={"integrator": "imex"})
+    assert imex.summary["params"]["solver"]["contact_reuse"] == 0.0
+    assert "contact_reuse_widen" not in imex.summary

@@ -555,6 +555,14 @@ TEST(Cli, ResumeGoesOnAsTheRelaxationWent) {
   EXPECT_EQ(summary("damped")["method"], "damped_dynamics");
   EXPECT_EQ(summary("damped")["k_global"], 1.0);
   EXPECT_EQ(summary("damped")["params"]["solver"]["integrator"], "imex-contact");
+  // another integrator leaves the file's contact reuse (imex-contact's) and its widening
+  ASSERT_EQ(
+      run("relax --resume " + first + " --integrator imex" + opts + " --out " + dir + "/imex").code,
+      0);
+  EXPECT_EQ(summary("imex")["params"]["solver"]["integrator"], "imex");
+  EXPECT_EQ(summary("imex")["params"]["solver"]["contact_reuse"], 0.0);
+  EXPECT_FALSE(summary("imex").contains("contact_reuse_widen"));
+  EXPECT_EQ(summary("imex")["method"], "fire");
   const Result damping =
       run("relax --resume " + first + " --k-global 1" + opts + " --out " + dir + "/refused");
   EXPECT_EQ(damping.code, 1);
