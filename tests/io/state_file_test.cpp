@@ -5,6 +5,8 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <utility>
+#include <vector>
 
 #include "fd_check.hpp"
 #include "knit/recipes/relax_knit.hpp"
@@ -175,24 +177,20 @@ TEST(StateFile, RelaxationSettingsRoundTrip) {
       EXPECT_NE(msg.find("relaxation." + key), std::string::npos) << msg;
     }
   };
-  KnitRelaxSettings bad = *g.knit->relaxation;
-  bad.time_step = -1;
-  refused(bad, "time_step");
-  bad = *g.knit->relaxation;
-  bad.time_step = std::numeric_limits<double>::quiet_NaN();
-  refused(bad, "time_step");
-  bad = *g.knit->relaxation;
-  bad.check_every = 0;
-  refused(bad, "check_every");
-  bad = *g.knit->relaxation;
-  bad.contact_reuse_widen = 0.5;
-  refused(bad, "contact_reuse_widen");
-  bad = *g.knit->relaxation;
-  bad.contact_points = 65;
-  refused(bad, "contact_points");
-  bad = *g.knit->relaxation;
-  bad.alpha_small = 2;
-  refused(bad, "alpha_small");
+  using Spoil = void (*)(KnitRelaxSettings&);
+  const std::vector<std::pair<Spoil, std::string>> spoiled = {
+      {[](KnitRelaxSettings& b) { b.time_step = -1; }, "time_step"},
+      {[](KnitRelaxSettings& b) { b.time_step = std::numeric_limits<double>::quiet_NaN(); },
+       "time_step"},
+      {[](KnitRelaxSettings& b) { b.check_every = 0; }, "check_every"},
+      {[](KnitRelaxSettings& b) { b.contact_reuse_widen = 0.5; }, "contact_reuse_widen"},
+      {[](KnitRelaxSettings& b) { b.contact_points = 65; }, "contact_points"},
+      {[](KnitRelaxSettings& b) { b.alpha_small = 2; }, "alpha_small"}};
+  for (const auto& [spoil, key] : spoiled) {
+    KnitRelaxSettings bad = *g.knit->relaxation;
+    spoil(bad);
+    refused(bad, key);
+  }
 }
 
 // files written before the knit block existed (version 1) are still read
