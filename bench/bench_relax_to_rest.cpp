@@ -1,12 +1,15 @@
 // Time to rest: relaxes knitted samples from their generated yarn with each relaxation
 // method asked and reports, per run, the wall time, the simulated time, whether and by
 // which test it came to rest, the potential energy, the force residual and the rest
-// shape (lengths along the fabric, extents, edge curl), with each shape measure's
-// relative difference from the first method's run of the same pattern.
+// shape (lengths along the fabric, gauge, extents, edge curl), with its difference from
+// the first method's run of the same pattern and, with --reference DIR, from the long
+// relaxation kept as the reference in DIR/PATTERN (scripts/relax_reference.sh writes
+// out/ref/rest; knit/analysis/rest_reference.hpp says what is compared).
 //   bench_relax_to_rest [--patterns stockinette,garter,rib2x2] [--rows R] [--cols C]
 //                       [--methods dynamic:explicit:8.474576271186441e-05,fire:imex:3e-4,
 //                                  fire:imex-contact:6e-4,fire:imex-contact:6e-4:0.05]
-//                       [--max-time S] [--threads N]
+//                       [--max-time S] [--check-every N] [--threads N]
+//                       [--reference DIR]
 // A method is KIND:INTEGRATOR:H[:REUSE[:WIDEN]] — KIND dynamic (damped dynamics, the
 // kinetic-energy rest test unless --residual is given) or fire (FIRE minimisation, the
 // force-residual test), INTEGRATOR explicit, imex or imex-contact, H the time step (s), and
@@ -15,8 +18,10 @@
 // (RelaxOptions::contact_reuse_widen, with its default residual).
 #include <CLI/CLI.hpp>
 #include <iostream>
+#include <map>
 
 #include "bench_util.hpp"
+#include "knit/analysis/rest_reference.hpp"
 #include "knit/recipes/relax_knit.hpp"
 
 namespace {
@@ -44,9 +49,6 @@ Method parse_method(const std::string& text) {
           text};
 }
 
-constexpr const char* SHAPE_KEYS[] = {"course_length_cm", "wale_length_cm", "course_extent_cm",
-                                      "wale_extent_cm", "edge_curl"};
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -54,8 +56,9 @@ int main(int argc, char** argv) {
   std::string methods_text =
       "dynamic:explicit:8.474576271186441e-05,dynamic:imex:3e-4,fire:imex:3e-4,"
       "fire:imex-contact:6e-4,fire:imex-contact:6e-4:0.05";
-  int rows = 12, cols = 12, threads = 0;
+  int rows = 12, cols = 12, threads = 0, check_every = 0;
   double max_time = 30, residual = 0;
+  std::string reference_dir;
   CLI::App app{"bench_relax_to_rest: wall time to relax knitted samples to rest, by method"};
   app.add_option("--patterns", patterns_text, "comma-separated patterns");
   app.add_option("--rows", rows);
@@ -65,12 +68,29 @@ int main(int argc, char** argv) {
   app.add_option("--residual", residual,
                  "force-residual rest threshold for every method (cm/s²; 0: the kinetic-energy "
                  "test for dynamic runs, the default for fire)");
+  app.add_option("--check-every", check_every,
+                 "steps between rest checks (0: every 0.015 simulated s)")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--reference", reference_dir,
+                 "compare each rest shape with DIR/PATTERN/summary.json, a `knitsim relax` run "
+                 "of the same size at rest (scripts/relax_reference.sh writes out/ref/rest)");
   app.add_option("--threads", threads, "0 = all cores");
   CLI11_PARSE(app, argc, argv);
   const auto thread_cap = knit::bench::limit_threads(threads);
   std::vector<Method> methods;
   for (const std::string& t : knit::bench::split_list(methods_text))
     methods.push_back(parse_method(t));
+  // every reference read before the first run: a missing one fails at once
+  std::map<std::string, nlohmann::json> references;
+  if (!reference_dir.empty()) {
+    try {
+      for (const std::string& pattern : knit::bench::split_list(patterns_text))
+        references[pattern] = knit::read_rest_reference(reference_dir, pattern, rows, cols);
+    } catch (const std::exception& e) {
+      std::cerr << "bench_relax_to_rest: --reference: " << e.what() << "\n";
+      return 1;
+    }
+  }
 
   nlohmann::json runs = nlohmann::json::array();
   for (const std::string& pattern : knit::bench::split_list(patterns_text)) {
@@ -86,7 +106,8 @@ int main(int argc, char** argv) {
       o.run.contact_reuse_widen = m.widen;
       o.run.max_time = max_time;
       o.run.force_residual = residual;
-      o.run.check_every = std::max(1, static_cast<int>(std::lround(0.015 / m.h)));
+      o.run.check_every =
+          check_every > 0 ? check_every : std::max(1, static_cast<int>(std::lround(0.015 / m.h)));
       o.run.progress = false;  // and no out_dir: nothing written
       const knit::RelaxResult r = knit::relax_knit(pattern, o);
       const nlohmann::json& s = r.report.summary;
@@ -107,20 +128,26 @@ int main(int argc, char** argv) {
           {"matrix_kept_fraction", s.value("matrix_kept_fraction", nlohmann::json())},
           {"contact_reuse_scale_mean", s.value("contact_reuse_scale_mean", nlohmann::json())},
           {"stage_seconds", s["stage_seconds"]}};
-      for (const char* key : SHAPE_KEYS) j[key] = s.value(key, nlohmann::json());
+      for (const char* key : knit::REST_SHAPE_KEYS) j[key] = s.value(key, nlohmann::json());
       if (first.is_null()) {
         first = j;
       } else {
-        nlohmann::json diff = nlohmann::json::object();
-        for (const char* key : SHAPE_KEYS)
-          if (j[key].is_number() && first[key].is_number() && first[key].get<double>() != 0)
-            diff[key] = j[key].get<double>() / first[key].get<double>() - 1;
-        j["relative_difference_from_first"] = diff;
+        j["relative_difference_from_first"] = knit::compare_rest_shape(j, first);
+      }
+      if (references.count(pattern)) {
+        j["relative_difference_from_reference"] = knit::compare_rest_shape(j, references[pattern]);
+        j["reference"] = reference_dir + "/" + pattern;
       }
       std::cerr << "relax_to_rest: " << pattern << " " << m.text << ": " << j["wall_time_s"]
                 << " s wall, " << j["sim_time_s"] << " s simulated, "
                 << (j["relaxed"].get<bool>() ? "at rest" : "not at rest") << ", PE "
-                << j["potential_energy"] << " erg\n";
+                << j["potential_energy"] << " erg";
+      if (j.contains("relative_difference_from_reference"))
+        std::cerr << ", width/height/gauge within "
+                  << 100 * j["relative_difference_from_reference"]["max_abs_width_height_gauge"]
+                               .get<double>()
+                  << " % of the reference";
+      std::cerr << "\n";
       runs.push_back(j);
     }
   }

@@ -6,7 +6,9 @@
 #   yarn by damped dynamics (explicit and IMEX) and by FIRE (IMEX; imex-contact without
 #   and with contact reuse), to rest or 30 s simulated (about 17 minutes on 2 cores, 6 of
 #   them the explicit stockinette; RELAX_ARGS
-#   replaces the options, e.g. RELAX_ARGS="--patterns stockinette --methods fire:imex:3e-4").
+#   replaces the options, e.g. RELAX_ARGS="--patterns stockinette --methods fire:imex:3e-4";
+#   with "--rows 42 --cols 32 --reference out/ref/rest" each rest shape is compared with
+#   the long relaxations scripts/relax_reference.sh keeps there).
 #   scarf: the 20×160 scarf of examples/scarf_on_plane.json falling onto the floor for
 #   SCARF_TIME s (default 0.2: the impact and the first folds) with the explicit step at
 #   the paper's 1/22500 s (the reference) and the IMEX step at 1e-4 and 2e-4 s. The
