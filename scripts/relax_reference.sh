@@ -9,8 +9,9 @@
 # for the damped part and 2–4 for the finish: run it in the background, e.g.
 #   nohup scripts/relax_reference.sh > out/ref.log 2>&1 &
 # Resumable: a stage that finished is kept, and a damped run that was interrupted (Ctrl-C,
-# SIGTERM: it writes its state) goes on from where it stopped, so run it again after an
-# interruption (a run killed outright starts again).
+# SIGTERM: it writes its state) or killed outright (its checkpoint, at most 10 minutes
+# old: `relax --checkpoint-every`) goes on from where it stopped, so run it again after an
+# interruption.
 # Usage: scripts/relax_reference.sh [PATTERN...]   (default: stockinette rib2x2 garter)
 # Environment: ROWS, COLS (default 42, 32), REF_TIME (default 120), OUT (default out/ref).
 set -euo pipefail
@@ -32,7 +33,7 @@ one() {
   local p=$1 damped=$OUT/$1 rest=$OUT/rest/$1
   case "$(status "$damped")" in
     ok) ;;
-    interrupted)
+    interrupted | running)
       local left
       left=$(awk -v e="$REF_TIME" -v t="$(number "$damped" sim_time_s)" 'BEGIN { printf "%.17g", e - t }')
       echo "== $p: the damped relaxation goes on from t = $(number "$damped" sim_time_s) s"

@@ -131,6 +131,11 @@ void register_relax(CLI::App& app) {
       ->check(CLI::Range(1, 1'000'000'000));
   add_threads_option(cmd, o->threads);
   cmd->add_flag("--no-frames", o->no_frames, "write only the initial and relaxed states");
+  cmd->add_option("--checkpoint-every", o->run.checkpoint_every_s,
+                  "with --no-frames: wall seconds between checkpoints, the state written to "
+                  "DIR/final.kstate and the summary's resume_command, so that a run killed "
+                  "outright goes on from there (default 600; 0: none)")
+      ->check(CLI::Range(0.0, 1e9));
   cmd->add_flag("--quiet,-q", o->quiet, "no progress line");
   add_export_option(cmd, o->export_format);
   cmd->callback([o, cmd]() {

@@ -413,4 +413,56 @@ TEST(Reliability, AnInterruptedRelaxationResumesBitForBit) {
                        SIGTERM, "relaxed.kstate");
 }
 
+// A relaxation without frames killed outright (SIGKILL: nothing of its own runs) still
+// leaves its last checkpoint: DIR/final.kstate and a summary that says "running" with the
+// command that goes on from it, which ends where the whole run ends, bit for bit.
+TEST(Reliability, AKilledRelaxationGoesOnFromItsCheckpoint) {
+  const std::string dir = temp_dir("sigkill_relax");
+  const std::string args =
+      "relax garter --rows 4 --cols 4 --max-time 0.04 --check-every 20 --ke-threshold 1e-12 "
+      "--no-frames --quiet --threads 2";
+  ASSERT_EQ(run(args + " --out " + dir + "/whole").code, 0);
+  const auto whole = read_json(dir + "/whole/summary.json");
+  EXPECT_EQ(whole["status"], "ok");
+  EXPECT_FALSE(whole.contains("checkpoints_written"));  // 600 s apart by default
+  const std::string cut = dir + "/cut";
+  const Child c = start(args + " --checkpoint-every 1e-9 --out " + cut);
+  ASSERT_TRUE(wait_for_lines(c, cut + "/log.csv", 4)) << "the run ended before it was killed";
+  // stopped where the checkpoint's two files agree (not between its two writes), then killed
+  nlohmann::json s;
+  for (int tries = 0; tries < 1000; ++tries) {
+    ASSERT_EQ(kill(c.pid, SIGSTOP), 0);
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    s = read_json(cut + "/summary.json");
+    if (s.value("status", "") == "running" && fs::exists(cut + "/final.kstate") &&
+        knit::read_state_file(cut + "/final.kstate").state.time == s["sim_time_s"].get<double>())
+      break;
+    kill(c.pid, SIGCONT);
+    std::this_thread::sleep_for(std::chrono::milliseconds(3));
+  }
+  kill(c.pid, SIGKILL);
+  EXPECT_EQ(wait_exit(c), 128 + SIGKILL);
+  ASSERT_EQ(s["status"], "running");
+  EXPECT_GT(s["sim_time_s"].get<double>(), 0);
+  EXPECT_LT(s["sim_time_s"].get<double>(), 0.04);
+  EXPECT_NE(s["message"].get<std::string>().find("final.kstate"), std::string::npos);
+  ASSERT_TRUE(s.contains("resume_command"));
+  std::string cmd = s["resume_command"];
+  ASSERT_EQ(cmd.rfind("knitsim ", 0), 0u) << cmd;
+  const Result r = run(cmd.substr(8));
+  ASSERT_EQ(r.code, 0) << cmd << "\n" << r.output;
+  const auto done = read_json(cut + "/summary.json");
+  EXPECT_EQ(done["status"], "ok");
+  const knit::StateFile a = knit::read_state_file(dir + "/whole/relaxed.kstate");
+  const knit::StateFile b = knit::read_state_file(cut + "/relaxed.kstate");
+  EXPECT_EQ(a.state.time, b.state.time);
+  EXPECT_TRUE(a.state.q == b.state.q) << "positions differ after the resume";
+  EXPECT_TRUE(a.state.v == b.state.v) << "velocities differ after the resume";
+  // a checkpoint interval that is not a duration is refused by name
+  const Result bad = run(args + " --checkpoint-every -1 --out " + dir + "/bad");
+  EXPECT_NE(bad.code, 0);
+  EXPECT_NE(bad.output.find("--checkpoint-every"), std::string::npos) << bad.output;
+  EXPECT_FALSE(fs::exists(dir + "/bad"));
+}
+
 }  // namespace

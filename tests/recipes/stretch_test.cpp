@@ -433,6 +433,63 @@ TEST(Stretch, AKilledPullResumedFromItsDirectoryEndsAsTheWholeOne) {
   EXPECT_EQ(file_text(o.out_dir + "/stretch.csv"), file_text((stopped / "stretch.csv").string()));
 }
 
+// A pull without frames killed outright keeps only its last checkpoint (RunOptions::
+// checkpoint_every_s): final.kstate and a summary that says "running". Its directory
+// resumes from that state, and the pull ends as the uninterrupted one.
+TEST(Stretch, APullWithoutFramesGoesOnFromItsCheckpoint) {
+  const fs::path tmp = ::testing::TempDir();
+  StretchOptions o;
+  o.to_strain = 0.05;
+  o.output_strain = 0.01;
+  o.progress = false;
+  o.render = false;
+  o.overwrite = true;
+  o.out_dir = (tmp / "stretch_ckpt_whole").string();
+  const StretchResult whole = stretch_knit(relaxed_sample(), o);
+  ASSERT_EQ(whole.report.summary["status"], "ok");
+  std::vector<fs::path> frames;
+  for (const auto& e : fs::directory_iterator(fs::path(o.out_dir) / "frames"))
+    frames.push_back(e.path());
+  std::sort(frames.begin(), frames.end());
+  ASSERT_GE(frames.size(), 4u);
+
+  // as the pull without frames left it, killed after a checkpoint at its third sample
+  const fs::path killed = tmp / "stretch_ckpt_killed";
+  fs::remove_all(killed);
+  fs::copy(o.out_dir, killed, fs::copy_options::recursive);
+  fs::remove_all(killed / "frames");
+  for (const char* f : {"stretch_force.png", "stretch_width.png"}) fs::remove(killed / f);
+  fs::copy_file(frames[2], killed / "final.kstate", fs::copy_options::overwrite_existing);
+  std::ofstream(killed / "summary.json") << R"({"status": "running"})";
+  EXPECT_EQ(stretch_resume_state(killed.string()), (killed / "final.kstate").string());
+
+  StretchOptions again = o;
+  again.out_dir = killed.string();
+  again.overwrite = false;
+  again.write_frames = false;
+  again.resume = killed.string();
+  const StretchResult resumed = stretch_knit(relaxed_sample(), again);
+  ASSERT_EQ(resumed.report.summary["status"], "ok") << resumed.report.summary.dump(2);
+  const StateFile a = read_state_file(o.out_dir + "/final.kstate");
+  const StateFile b = read_state_file((killed / "final.kstate").string());
+  EXPECT_EQ(a.state.time, b.state.time);
+  EXPECT_TRUE(a.state.q == b.state.q);
+  EXPECT_TRUE(a.state.v == b.state.v);
+  EXPECT_EQ(file_text(o.out_dir + "/stretch.csv"), file_text((killed / "stretch.csv").string()));
+
+  // a checkpoint whose time has no sample in stretch.csv is not taken
+  fs::remove_all(killed);
+  fs::copy(o.out_dir, killed, fs::copy_options::recursive);
+  fs::remove_all(killed / "frames");
+  std::ofstream(killed / "summary.json") << R"({"status": "running"})";
+  {  // the header and the first sample (t = 0) only: the end state has none
+    const std::string csv = file_text(o.out_dir + "/stretch.csv");
+    std::ofstream(killed / "stretch.csv", std::ios::trunc)
+        << csv.substr(0, csv.find('\n', csv.find('\n') + 1) + 1);
+  }
+  EXPECT_THROW(stretch_resume_state(killed.string()), std::invalid_argument);
+}
+
 TEST(Stretch, BadOptionsAreRefusedBeforeAnythingIsWritten) {
   const std::string out = (fs::path(::testing::TempDir()) / "stretch_bad").string();
   fs::remove_all(out);

@@ -225,6 +225,11 @@ std::string stretch_resume_state(const std::string& out_dir) {
   if (summary.is_object() && summary.value("status", "") == "interrupted" &&
       fs::exists(dir / "final.kstate"))
     return (dir / "final.kstate").string();
+  // a pull without frames killed outright: its last checkpoint (RunOptions::checkpoint_every_s)
+  if (summary.is_object() && summary.value("status", "") == "running" &&
+      fs::exists(dir / "final.kstate") &&
+      has_row(read_state_file((dir / "final.kstate").string()).state.time))
+    return (dir / "final.kstate").string();
   std::vector<std::string> frames;
   if (fs::is_directory(dir / "frames"))
     for (const auto& e : fs::directory_iterator(dir / "frames"))

@@ -47,6 +47,7 @@ RunReport relax(Simulator& sim, State& state, const RelaxOptions& o, nlohmann::j
   run.out_dir = o.out_dir;
   run.progress = o.progress;
   run.write_frames = o.write_frames;
+  run.checkpoint_every_s = o.checkpoint_every_s;
   run.continue_in_place = o.continue_in_place;
   run.resume_command = o.resume_command;
   run.halving_calm_steps = o.halving_calm_steps;

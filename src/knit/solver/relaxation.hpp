@@ -27,6 +27,7 @@ struct RelaxOptions {
   bool overwrite = false;  ///< empty a directory that holds another run's files first
   bool progress = true;
   bool write_frames = true;
+  double checkpoint_every_s = 600;  ///< RunOptions::checkpoint_every_s (without frames)
   /// The run resumes from a state of the run in out_dir and goes on there (see
   /// RunOptions::continue_in_place).
   bool continue_in_place = false;

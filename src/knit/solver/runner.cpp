@@ -248,6 +248,9 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
   if (opt.output_every < 1)
     throw std::invalid_argument("output_every = " + std::to_string(opt.output_every) +
                                 " (expected at least 1 step between written states)");
+  if (!(opt.checkpoint_every_s >= 0) || !std::isfinite(opt.checkpoint_every_s))
+    throw std::invalid_argument("checkpoint_every_s = " + short_number(opt.checkpoint_every_s) +
+                                " (expected wall seconds >= 0; 0: no checkpoints)");
   const bool by_end_time = std::isfinite(opt.end_time);
   const double end_time = by_end_time ? opt.end_time : state.time + opt.duration;
   if (by_end_time) {
@@ -313,6 +316,8 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
   long long last_output_step = 0;
   long long step_index = first_step;
   int frames_written = 0;
+  auto last_checkpoint = t0;
+  int checkpoints = 0;
   double contact_pairs_sum = 0;
   long long contact_samples = 0;
   // the IMEX_CONTACT step's conjugate-gradient solves
@@ -335,6 +340,38 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
   std::vector<double> short_steps;
   const bool tty = isatty(fileno(stderr));
   bool printed_progress = false;
+
+  // the command that goes on from DIR/final.kstate with the time left
+  auto resume_command = [&] {
+    std::string cmd = opt.resume_command;
+    if (const size_t at = cmd.find("{time_left}"); at != std::string::npos) {
+      char left[32];
+      std::snprintf(left, sizeof left, "%.17g", end_time - state.time);
+      cmd.replace(at, 11, left);
+    }
+    return cmd;
+  };
+  // a run without frames keeps its latest state on disk (RunOptions::checkpoint_every_s)
+  auto write_checkpoint = [&] {
+    write_state_file((dir / "final.kstate").string(), make_state_file(model, state));
+    nlohmann::json c;
+    c["status"] = "running";
+    c["message"] = "a checkpoint at t = " + short_number(state.time) + " s, " +
+                   format_duration(seconds_since(t0)) +
+                   " into the run: if no knitsim is running in this directory, the run was "
+                   "stopped without writing its end; it goes on from final.kstate";
+    if (!opt.resume_command.empty()) c["resume_command"] = resume_command();
+    c["knitsim_version"] = knitsim_version();
+    c["steps"] = report.steps;
+    c["time_step_s"] = h;
+    c["end_time_s"] = end_time;
+    c["sim_time_s"] = state.time;
+    c["wall_time_s"] = seconds_since(t0);
+    for (const auto& [key, value] : opt.extra.items()) c[key] = value;
+    write_file_atomic((dir / "summary.json").string(), c.dump(2) + "\n");
+    last_checkpoint = Clock::now();
+    ++checkpoints;
+  };
 
   auto write_output = [&](bool frame) {
     sim.forward(state);  // whole records (the steps' own are lean: below)
@@ -451,6 +488,9 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
         stopped_early = true;
         break;
       }
+      if (write && !opt.write_frames && opt.checkpoint_every_s > 0 && !last && signal == 0 &&
+          seconds_since(last_checkpoint) >= opt.checkpoint_every_s)
+        write_checkpoint();
     }
     if (signal != 0) {
       report.status = StepStatus::INTERRUPTED;
@@ -491,15 +531,8 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
   nlohmann::json s;
   s["status"] = status_word(report.status);
   if (!report.message.empty()) s["message"] = report.message;
-  if (report.status != StepStatus::OK && !opt.resume_command.empty()) {
-    std::string cmd = opt.resume_command;
-    if (const size_t at = cmd.find("{time_left}"); at != std::string::npos) {
-      char left[32];
-      std::snprintf(left, sizeof left, "%.17g", end_time - state.time);
-      cmd.replace(at, 11, left);
-    }
-    s["resume_command"] = cmd;
-  }
+  if (report.status != StepStatus::OK && !opt.resume_command.empty())
+    s["resume_command"] = resume_command();
   s["knitsim_version"] = knitsim_version();
   s["stopped_early"] = stopped_early;
   s["steps"] = report.steps;
@@ -595,6 +628,7 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
   s["us_per_segment_step"] =
       report.steps > 0 ? 1e6 * wall / (static_cast<double>(report.steps) * model.num_seg()) : 0.0;
   s["frames_written"] = frames_written;
+  if (checkpoints > 0) s["checkpoints_written"] = checkpoints;
   s["params"] = params_json(model.params);
   for (const auto& [key, value] : opt.extra.items()) s[key] = value;
   if (opt.on_finish) opt.on_finish(sim, state, s);

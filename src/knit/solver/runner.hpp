@@ -36,6 +36,12 @@ struct RunOptions {
   std::string resume_command;
   bool progress = true;  ///< progress line on stderr for runs over ~2 s
   bool write_frames = true;
+  /// Without frames, a run that writes keeps a state on disk no more than this many wall
+  /// seconds old: at the first output step after that, DIR/final.kstate is written
+  /// (atomically, the state as it is: the run's results do not change) and summary.json
+  /// says "status": "running" with the command that resumes from it, so that a run killed
+  /// outright (SIGKILL, the machine gone) goes on from there. 0: never.
+  double checkpoint_every_s = 600;
   /// With SolverSettings::max_step_halvings: steps that pass at a halved step before it
   /// doubles again (HalvingStepper); 0 (the default) keeps the halved step to the end.
   int halving_calm_steps = 0;
