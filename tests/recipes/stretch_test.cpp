@@ -338,19 +338,44 @@ std::string file_text(const std::string& path) {
   return s.str();
 }
 
-// A pull killed partway (its frames after the third gone, no summary, no final state) and
-// resumed from its directory ends where the uninterrupted pull ends, with the same curve;
-// a resume from an interrupt's final.kstate between two samples, too; a resume with
-// another speed, a held pull or --overwrite is refused before anything changes.
-TEST(Stretch, AKilledPullResumedFromItsDirectoryEndsAsTheWholeOne) {
-  const fs::path tmp = ::testing::TempDir();
+// A short course pull of relaxed_sample() into TempDir()/NAME (written over), a sample every
+// 0.01 of strain to 0.05.
+StretchOptions small_pull(const std::string& name) {
   StretchOptions o;
   o.to_strain = 0.05;
   o.output_strain = 0.01;
   o.progress = false;
   o.render = false;
   o.overwrite = true;
-  o.out_dir = (tmp / "stretch_whole").string();
+  o.out_dir = (fs::path(::testing::TempDir()) / name).string();
+  return o;
+}
+
+// DIR/frames/*, in order
+std::vector<fs::path> sorted_frames(const fs::path& dir) {
+  std::vector<fs::path> frames;
+  for (const auto& e : fs::directory_iterator(dir / "frames")) frames.push_back(e.path());
+  std::sort(frames.begin(), frames.end());
+  return frames;
+}
+
+// The pulls in `whole` and `dir` end in the same state, bit for bit, with the same curve.
+void expect_same_end(const fs::path& whole, const fs::path& dir) {
+  const StateFile a = read_state_file((whole / "final.kstate").string());
+  const StateFile b = read_state_file((dir / "final.kstate").string());
+  EXPECT_EQ(a.state.time, b.state.time);
+  EXPECT_TRUE(a.state.q == b.state.q);
+  EXPECT_TRUE(a.state.v == b.state.v);
+  EXPECT_EQ(file_text((whole / "stretch.csv").string()), file_text((dir / "stretch.csv").string()));
+}
+
+// A pull killed partway (its frames after the third gone, no summary, no final state) and
+// resumed from its directory ends where the uninterrupted pull ends, with the same curve;
+// a resume from an interrupt's final.kstate between two samples, too; a resume with
+// another speed, a held pull or --overwrite is refused before anything changes.
+TEST(Stretch, AKilledPullResumedFromItsDirectoryEndsAsTheWholeOne) {
+  const fs::path tmp = ::testing::TempDir();
+  const StretchOptions o = small_pull("stretch_whole");
   const StretchResult whole = stretch_knit(relaxed_sample(), o);
   ASSERT_EQ(whole.report.summary["status"], "ok");
   ASSERT_GE(whole.curve.size(), 6u);
@@ -361,9 +386,7 @@ TEST(Stretch, AKilledPullResumedFromItsDirectoryEndsAsTheWholeOne) {
   fs::copy(o.out_dir, killed, fs::copy_options::recursive);
   for (const char* f : {"summary.json", "final.kstate", "stretch_force.png", "stretch_width.png"})
     fs::remove(killed / f);
-  std::vector<fs::path> frames;
-  for (const auto& e : fs::directory_iterator(killed / "frames")) frames.push_back(e.path());
-  std::sort(frames.begin(), frames.end());
+  const std::vector<fs::path> frames = sorted_frames(killed);
   ASSERT_EQ(frames.size(), whole.curve.size());
   for (size_t k = 3; k < frames.size(); ++k) fs::remove(frames[k]);
   EXPECT_EQ(stretch_resume_state(killed.string()), frames[2].string());
@@ -398,12 +421,7 @@ TEST(Stretch, AKilledPullResumedFromItsDirectoryEndsAsTheWholeOne) {
   const StretchResult resumed = stretch_knit(relaxed_sample(), again);
   ASSERT_EQ(resumed.report.summary["status"], "ok") << resumed.report.summary.dump(2);
   EXPECT_EQ(resumed.report.summary["resumed_from"], frames[2].string());
-  const StateFile a = read_state_file(o.out_dir + "/final.kstate");
-  const StateFile b = read_state_file((killed / "final.kstate").string());
-  EXPECT_EQ(a.state.time, b.state.time);
-  EXPECT_TRUE(a.state.q == b.state.q);
-  EXPECT_TRUE(a.state.v == b.state.v);
-  EXPECT_EQ(file_text(o.out_dir + "/stretch.csv"), file_text((killed / "stretch.csv").string()));
+  expect_same_end(o.out_dir, killed);
   ASSERT_EQ(resumed.curve.size(), whole.curve.size());
   // the curve read back has stretch.csv's ten digits
   const double work = whole.report.summary["stretch"]["work_erg"].get<double>();
@@ -428,9 +446,7 @@ TEST(Stretch, AKilledPullResumedFromItsDirectoryEndsAsTheWholeOne) {
   rest.resume = (stopped / "final.kstate").string();
   const StretchResult r = stretch_knit(relaxed_sample(), rest);
   ASSERT_EQ(r.report.summary["status"], "ok") << r.report.summary.dump(2);
-  const StateFile c = read_state_file((stopped / "final.kstate").string());
-  EXPECT_TRUE(a.state.q == c.state.q);
-  EXPECT_EQ(file_text(o.out_dir + "/stretch.csv"), file_text((stopped / "stretch.csv").string()));
+  expect_same_end(o.out_dir, stopped);
 }
 
 // A pull without frames killed outright keeps only its last checkpoint (RunOptions::
@@ -438,19 +454,10 @@ TEST(Stretch, AKilledPullResumedFromItsDirectoryEndsAsTheWholeOne) {
 // resumes from that state, and the pull ends as the uninterrupted one.
 TEST(Stretch, APullWithoutFramesGoesOnFromItsCheckpoint) {
   const fs::path tmp = ::testing::TempDir();
-  StretchOptions o;
-  o.to_strain = 0.05;
-  o.output_strain = 0.01;
-  o.progress = false;
-  o.render = false;
-  o.overwrite = true;
-  o.out_dir = (tmp / "stretch_ckpt_whole").string();
+  const StretchOptions o = small_pull("stretch_ckpt_whole");
   const StretchResult whole = stretch_knit(relaxed_sample(), o);
   ASSERT_EQ(whole.report.summary["status"], "ok");
-  std::vector<fs::path> frames;
-  for (const auto& e : fs::directory_iterator(fs::path(o.out_dir) / "frames"))
-    frames.push_back(e.path());
-  std::sort(frames.begin(), frames.end());
+  const std::vector<fs::path> frames = sorted_frames(o.out_dir);
   ASSERT_GE(frames.size(), 4u);
 
   // as the pull without frames left it, killed after a checkpoint at its third sample
@@ -470,12 +477,7 @@ TEST(Stretch, APullWithoutFramesGoesOnFromItsCheckpoint) {
   again.resume = killed.string();
   const StretchResult resumed = stretch_knit(relaxed_sample(), again);
   ASSERT_EQ(resumed.report.summary["status"], "ok") << resumed.report.summary.dump(2);
-  const StateFile a = read_state_file(o.out_dir + "/final.kstate");
-  const StateFile b = read_state_file((killed / "final.kstate").string());
-  EXPECT_EQ(a.state.time, b.state.time);
-  EXPECT_TRUE(a.state.q == b.state.q);
-  EXPECT_TRUE(a.state.v == b.state.v);
-  EXPECT_EQ(file_text(o.out_dir + "/stretch.csv"), file_text((killed / "stretch.csv").string()));
+  expect_same_end(o.out_dir, killed);
 
   // a checkpoint whose time has no sample in stretch.csv is not taken
   fs::remove_all(killed);
