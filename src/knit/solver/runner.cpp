@@ -351,7 +351,9 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
     }
     return cmd;
   };
-  // a run without frames keeps its latest state on disk (RunOptions::checkpoint_every_s)
+  // a run without frames keeps its latest state on disk (RunOptions::checkpoint_every_s);
+  // each file is replaced atomically, the state first: a kill between the two leaves the
+  // previous checkpoint's summary, whose command then runs one interval past the end
   auto write_checkpoint = [&] {
     write_state_file((dir / "final.kstate").string(), make_state_file(model, state));
     nlohmann::json c;
