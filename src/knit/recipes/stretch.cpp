@@ -222,14 +222,14 @@ std::string stretch_resume_state(const std::string& out_dir) {
   };
   std::ifstream in(dir / "summary.json");
   const nlohmann::json summary = nlohmann::json::parse(in, nullptr, false);
-  if (summary.is_object() && summary.value("status", "") == "interrupted" &&
-      fs::exists(dir / "final.kstate"))
-    return (dir / "final.kstate").string();
-  // a pull without frames killed outright: its last checkpoint (RunOptions::checkpoint_every_s)
-  if (summary.is_object() && summary.value("status", "") == "running" &&
-      fs::exists(dir / "final.kstate") &&
-      has_row(read_state_file((dir / "final.kstate").string()).state.time))
-    return (dir / "final.kstate").string();
+  // an interrupt's final state, or the last checkpoint of a pull without frames killed
+  // outright (RunOptions::checkpoint_every_s) where stretch.csv has its sample
+  const std::string status = summary.is_object() ? summary.value("status", "") : "";
+  const fs::path final_state = dir / "final.kstate";
+  if (fs::exists(final_state) &&
+      (status == "interrupted" ||
+       (status == "running" && has_row(read_state_file(final_state.string()).state.time))))
+    return final_state.string();
   std::vector<std::string> frames;
   if (fs::is_directory(dir / "frames"))
     for (const auto& e : fs::directory_iterator(dir / "frames"))

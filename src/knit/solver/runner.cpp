@@ -351,6 +351,14 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
     }
     return cmd;
   };
+  // what every summary says of where the run stands (the end's and a checkpoint's)
+  auto where_the_run_is = [&](nlohmann::json& j) {
+    j["knitsim_version"] = knitsim_version();
+    j["steps"] = report.steps;
+    j["time_step_s"] = h;
+    j["end_time_s"] = end_time;
+    j["sim_time_s"] = state.time;
+  };
   // a run without frames keeps its latest state on disk (RunOptions::checkpoint_every_s);
   // each file is replaced atomically, the state first: a kill between the two leaves the
   // previous checkpoint's summary, whose command then runs one interval past the end
@@ -363,11 +371,7 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
                    " into the run: if no knitsim is running in this directory, the run was "
                    "stopped without writing its end; it goes on from final.kstate";
     if (!opt.resume_command.empty()) c["resume_command"] = resume_command();
-    c["knitsim_version"] = knitsim_version();
-    c["steps"] = report.steps;
-    c["time_step_s"] = h;
-    c["end_time_s"] = end_time;
-    c["sim_time_s"] = state.time;
+    where_the_run_is(c);
     c["wall_time_s"] = seconds_since(t0);
     for (const auto& [key, value] : opt.extra.items()) c[key] = value;
     write_file_atomic((dir / "summary.json").string(), c.dump(2) + "\n");
@@ -535,12 +539,8 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
   if (!report.message.empty()) s["message"] = report.message;
   if (report.status != StepStatus::OK && !opt.resume_command.empty())
     s["resume_command"] = resume_command();
-  s["knitsim_version"] = knitsim_version();
+  where_the_run_is(s);
   s["stopped_early"] = stopped_early;
-  s["steps"] = report.steps;
-  s["time_step_s"] = h;
-  s["end_time_s"] = end_time;
-  s["sim_time_s"] = state.time;
   if (!short_steps.empty()) {
     s["shortened_steps_s"] = short_steps;
     s["time_note"] =
