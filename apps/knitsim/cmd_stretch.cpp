@@ -228,6 +228,7 @@ void register_stretch(CLI::App& app) {
       throw;
     }
     if (!temp.empty()) {
+      knit::claim_run_output((std::filesystem::path(o->out) / "relaxed.kstate").string());
       std::filesystem::copy_file(temp, std::filesystem::path(o->out) / "relaxed.kstate",
                                  std::filesystem::copy_options::overwrite_existing);
       std::remove(temp.c_str());

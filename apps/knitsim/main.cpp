@@ -6,6 +6,7 @@
 
 #include "commands.hpp"
 #include "common.hpp"
+#include "knit/io/run_dir.hpp"
 #include "knit/solver/interrupt.hpp"
 
 int main(int argc, char** argv) {
@@ -22,9 +23,20 @@ int main(int argc, char** argv) {
   knitsim::register_mesh(app);
   knitsim::register_view(app);
   knitsim::register_version(app);
+  // an output named "" would be no output at all: refused by every command alike
+  const CLI::Validator named(
+      [](std::string& s) {
+        return s.empty() ? std::string("the name is empty; give a file or directory") : "";
+      },
+      "", "not empty");
+  for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; }))
+    if (CLI::Option* out = sub->get_option_no_throw("--out")) out->check(named);
   // the first SIGINT/SIGTERM ends a run cleanly after its current step (state and summary
   // written); a second one ends the process at once
   knit::InterruptHandler interrupts;
+  // the run directories a command opens stay locked until it ends: its own outputs after
+  // the recipe's (a stretch's relaxed.kstate) are named in the directory's marker too
+  const knit::RunDirectoryScope run_directories;
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -13,6 +13,7 @@
 #include <stdexcept>
 
 #include "knit/io/process.hpp"
+#include "knit/io/run_dir.hpp"
 #include "knit/io/state_file.hpp"
 
 namespace knit {
@@ -118,6 +119,7 @@ std::string plot_script(const std::string& out_tmp, const std::string& title,
 void render_plot(const std::string& gnuplot, const TempDir& tmp, const std::string& out,
                  const std::string& title, const std::string& body) {
   const std::string out_tmp = out + ".tmp";
+  claim_run_output(out);  // and so out_tmp
   const std::string script = (tmp.path / (fs::path(out).stem().string() + ".gp")).string();
   write_file_atomic(script, plot_script(out_tmp, title, body));
   try {

@@ -2,6 +2,7 @@
 
 #include "knit/io/byte_reader.hpp"
 #include "knit/io/input_file.hpp"
+#include "knit/io/run_dir.hpp"
 
 #include <cmath>
 #include <cstdint>
@@ -168,6 +169,7 @@ void write_file_atomic(const std::string& path, const std::string& contents) {
   namespace fs = std::filesystem;
   const fs::path target(path);
   const fs::path tmp = target.parent_path() / (target.filename().string() + ".tmp");
+  claim_run_output(path);  // a run directory's marker names it (and so its NAME.tmp)
   {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
     if (!out) throw std::runtime_error(path + ": cannot open for writing");

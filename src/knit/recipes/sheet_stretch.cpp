@@ -228,9 +228,13 @@ StretchResult stretch_sheet(const std::string& kstate_path, const SheetStretchOp
   const KnitSheet ks = make_knit_sheet(g, so.node_spacing);
   const auto t0 = std::chrono::steady_clock::now();
   const sheet::SheetEmbedding emb = sheet::embed_points(ks.mesh, ks.embedded);
+  RunDirectory held;  // locked until its last output is written
   if (!o.out_dir.empty()) {
-    prepare_run_directory(o.out_dir, o.overwrite);
-    if (o.write_frames) fs::create_directories(fs::path(o.out_dir) / "frames");
+    held = prepare_run_directory(o.out_dir, o.overwrite);
+    if (o.write_frames) {
+      fs::create_directories(fs::path(o.out_dir) / "frames");
+      claim_run_output((fs::path(o.out_dir) / "frames").string());
+    }
   }
 
   // the samples' strains: out to the target, then back and forth for the cycles

@@ -292,6 +292,7 @@ nlohmann::json render_stretch(const std::string& out_dir, const std::vector<Stre
   const bool stopped = reached < to * (1 - 1e-9);
   if (stopped) to = reached;
   fs::create_directories(dir / "renders");
+  claim_run_output((dir / "renders").string());
   std::vector<Image> panels;
   std::vector<std::string> labels;
   nlohmann::json shown = nlohmann::json::object();
@@ -314,6 +315,7 @@ nlohmann::json render_stretch(const std::string& out_dir, const std::vector<Stre
   }
   write_png(compose_side_by_side(panels, labels), (dir / "stretch_renders.png").string());
   fs::create_directories(dir / "movie");
+  claim_run_output((dir / "movie").string());
   // movie frames at a lighter sampling than the stills
   ro.spp = ro.shadow_rays = ro.ao_rays = 2;
   // at the pull's real time, each frame with its time
@@ -622,7 +624,10 @@ StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions&
   scene.output_every = static_cast<int>(std::min<long long>(output_every, 1'000'000'000));
   const Clamp& moving = scene.model.clamps[1];
   const std::string resumed_from = o.resume.empty() ? "" : resume_stretch(o, scene, held, result);
-  if (!o.out_dir.empty() && resumed_from.empty()) prepare_run_directory(o.out_dir, o.overwrite);
+  RunDirectory locked;  // until the last plot and render are written
+  if (!o.out_dir.empty())
+    locked = resumed_from.empty() ? prepare_run_directory(o.out_dir, o.overwrite)
+                                  : continue_run_directory(o.out_dir);
 
   const fs::path csv_path = fs::path(o.out_dir) / "stretch.csv";
   auto frame_of = [&](double time) {
