@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "commands.hpp"
+#include "common.hpp"
 #include "knit/io/state_file.hpp"
 #include "knit/io/states.hpp"
 #include "knit/io/viewer.hpp"
@@ -14,7 +15,8 @@ namespace fs = std::filesystem;
 namespace {
 
 struct ViewArgs {
-  std::string input, out, title;
+  std::string input, out, title, scene;
+  bool no_objects = false;
   int every = 1;
   knit::ViewerOptions viewer;
 };
@@ -36,6 +38,7 @@ void run_view(ViewArgs a) {
     frames.push_back(knit::load_state(a.input));
     times.push_back(frames.back().state.time);
   }
+  a.viewer.objects = objects_for(a.input, a.scene, a.no_objects);
   a.viewer.title = a.title.empty() ? fs::path(a.input).filename().string() : a.title;
   if (a.viewer.title.empty()) a.viewer.title = "knitsim";
   knit::write_file_atomic(a.out, knit::viewer_html(frames, times, a.viewer));
@@ -62,6 +65,11 @@ void register_view(CLI::App& app) {
       ->check(CLI::Range(1, 64));
   sub->add_option("--sides", args->viewer.sides, "vertices around the tube (default 8)")
       ->check(CLI::Range(3, 64));
+  sub->add_option("--scene", args->scene,
+                  "draw this scene's objects with the yarn (default: the scene a simulation's "
+                  "summary.json beside the input names)")
+      ->check(CLI::ExistingFile);
+  sub->add_flag("--no-objects", args->no_objects, "draw the yarn alone");
   sub->callback([args] { run_view(*args); });
 }
 
