@@ -3,9 +3,11 @@
 #include <exception>
 #include <iostream>
 #include <new>
+#include <string>
 
 #include "commands.hpp"
 #include "common.hpp"
+#include "knit/io/input_file.hpp"
 #include "knit/solver/interrupt.hpp"
 
 int main(int argc, char** argv) {
@@ -25,6 +27,20 @@ int main(int argc, char** argv) {
   // the first SIGINT/SIGTERM ends a run cleanly after its current step (state and summary
   // written); a second one ends the process at once
   knit::InterruptHandler interrupts;
+  // an unknown command is named (CLI11 says only that a subcommand is required)
+  if (argc > 1 && argv[1][0] != '-') {
+    std::string names;
+    bool known = false;
+    for (const CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) {
+      known = known || sub->get_name() == argv[1];
+      names += (names.empty() ? "" : ", ") + sub->get_name();
+    }
+    if (!known) {
+      std::cerr << "knitsim: error: unknown command '" << knit::printable(argv[1]) << "' (one of "
+                << names << "; knitsim --help says more)\n";
+      return static_cast<int>(CLI::ExitCodes::ExtrasError);
+    }
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
