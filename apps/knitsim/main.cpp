@@ -3,9 +3,11 @@
 #include <exception>
 #include <iostream>
 #include <new>
+#include <string>
 
 #include "commands.hpp"
 #include "common.hpp"
+#include "knit/io/input_file.hpp"
 #include "knit/io/run_dir.hpp"
 #include "knit/solver/interrupt.hpp"
 
@@ -37,6 +39,20 @@ int main(int argc, char** argv) {
   // the run directories a command opens stay locked until it ends: its own outputs after
   // the recipe's (a stretch's relaxed.kstate) are named in the directory's marker too
   const knit::RunDirectoryScope run_directories;
+  // an unknown command is named (CLI11 says only that a subcommand is required)
+  if (argc > 1 && argv[1][0] != '-') {
+    std::string names;
+    bool known = false;
+    for (const CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) {
+      known = known || sub->get_name() == argv[1];
+      names += (names.empty() ? "" : ", ") + sub->get_name();
+    }
+    if (!known) {
+      std::cerr << "knitsim: error: unknown command '" << knit::printable(argv[1]) << "' (one of "
+                << names << "; knitsim --help says more)\n";
+      return static_cast<int>(CLI::ExitCodes::ExtrasError);
+    }
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -326,6 +326,8 @@ StateFile read_state_file(const std::string& path) {
       k.cast_on = info.value("cast_on", false);    // and since cast-ons exist
       // and how it was being relaxed, since `relax --resume` goes on that way
       if (info.contains("relaxation")) k.relaxation = parse_relaxation(info.at("relaxation"));
+    } catch (const nlohmann::json::exception& e) {
+      r.fail("bad knit description: " + json_library_message(e.what()));
     } catch (const std::exception& e) {
       r.fail(std::string("bad knit description: ") + e.what());
     }

@@ -354,11 +354,8 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
   // the command that goes on from DIR/final.kstate with the time left
   auto resume_command = [&] {
     std::string cmd = opt.resume_command;
-    if (const size_t at = cmd.find("{time_left}"); at != std::string::npos) {
-      char left[32];
-      std::snprintf(left, sizeof left, "%.17g", end_time - state.time);
-      cmd.replace(at, 11, left);
-    }
+    if (const size_t at = cmd.find("{time_left}"); at != std::string::npos)
+      cmd.replace(at, 11, time_left_text(state.time, end_time, h));
     return cmd;
   };
   // what every summary says of where the run stands (the end's and a checkpoint's)
