@@ -4,7 +4,7 @@
 # real readers it opens our exports in: Blender (OBJ, PLY; Debian's blender, about 106 MB
 # to download, 440 MB installed, once), Assimp (glTF; assimp-utils), VTK (VTP, as ParaView
 # reads it; python3-vtk9), Chromium (the viewer page, headless) and three.js's USDA parser
-# (the .usda; run by Debian's nodejs, fetched from npm by scripts/fetch-usda-parser.sh).
+# (the .usda; run by Debian's nodejs, fetched with npm pack by scripts/fetch-usda-parser.sh).
 # KNIT_SKIP_READERS=1 (or KNIT_SKIP_BLENDER=1) neither installs the readers nor runs the
 # tests that need them.
 set -euo pipefail

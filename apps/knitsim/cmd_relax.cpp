@@ -263,11 +263,12 @@ void register_relax(CLI::App& app) {
     if (o->from.empty()) {
       const auto& s = report.summary;
       std::cout << "relaxed " << o->pattern << " " << o->knit.knit.rows << "x" << o->knit.knit.cols
-                << ": " << (s["relaxed"].get<bool>() ? "at rest" : "time limit reached before rest")
-                << "; course " << s["course_extent_cm"].get<double>() << " cm, wale "
-                << s["wale_extent_cm"].get<double>() << " cm (along the fabric "
-                << s["course_length_cm"].get<double>() << " × " << s["wale_length_cm"].get<double>()
-                << " cm), edge curl " << s["edge_curl"].get<double>() << "\n";
+                << ": "
+                << (s.value("relaxed", false) ? "at rest" : "time limit reached before rest")
+                << "; course " << quantity(s["course_extent_cm"], "cm") << ", wale "
+                << quantity(s["wale_extent_cm"], "cm") << " (along the fabric "
+                << quantity(s["course_length_cm"]) << " × " << quantity(s["wale_length_cm"], "cm")
+                << "), edge curl " << quantity(s["edge_curl"]) << "\n";
     }
     if (report.status != knit::StepStatus::OK) throw RunFailed();
   });

@@ -126,7 +126,7 @@ void render_sequence(const RenderArgs& a, const knit::RenderOptions& o) {
                              ": rendering a directory of states writes numbered frames; give a "
                              "directory");
   // frames of an earlier sequence would end up in this one's movie
-  knit::prepare_run_directory(a.out, a.overwrite);
+  const knit::RunDirectory held = knit::prepare_run_directory(a.out, a.overwrite);
   note_rows(knit::read_state_file(files.front()), a, files.front());
   const knit::SequenceResult r = knit::render_sequence(files, o, a.out, a.fps);
   std::cout << "wrote " << r.frames << " frames to " << a.out << " (" << r.seconds_per_frame

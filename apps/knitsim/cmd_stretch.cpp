@@ -15,6 +15,7 @@
 
 #include "commands.hpp"
 #include "common.hpp"
+#include "knit/io/plot.hpp"
 #include "knit/io/run_dir.hpp"
 #include "knit/io/state_file.hpp"
 #include "knit/recipes/relax_knit.hpp"
@@ -141,7 +142,9 @@ void register_stretch(CLI::App& app) {
     if (!o->plot.empty()) {
       if (o->inputs.empty())
         throw std::invalid_argument("stretch --plot: give the stretch runs' directories");
-      std::cout << "wrote " << knit::plot_stretch_runs(o->inputs, o->plot) << "\n";
+      knit::check_plot_path(o->plot, "--plot");
+      const std::string written = knit::plot_stretch_runs(o->inputs, o->plot);
+      std::cout << "wrote " << written << "\n";
       return;
     }
     if (o->out.empty()) throw std::invalid_argument("stretch: --out is required");
@@ -227,7 +230,15 @@ void register_stretch(CLI::App& app) {
           const knit::SheetFit fit = knit::fit_sheet_material(from, o->fit, o->sheet);
           o->sheet.material = fit.material;
           o->sheet.fit = fit.report;
-          if (!o->quiet) std::cerr << "sheet fitted: " << fit.report["material"].dump() << "\n";
+          if (!o->quiet) {
+            // a copy: a key it lacks reads as null ("not measured"), not as undefined
+            nlohmann::json m = fit.report["material"];
+            std::cerr << "sheet fitted: k_course "
+                      << quantity(m["k_stretch_u_dyn_per_cm"], "dyn/cm") << ", k_wale "
+                      << quantity(m["k_stretch_v_dyn_per_cm"], "dyn/cm") << ", k_shear "
+                      << quantity(m["k_shear_dyn_per_cm"], "dyn/cm") << ", k_bend "
+                      << quantity(m["k_bend_erg"], "erg") << "\n";
+          }
         }
         result = knit::stretch_sheet(from, o->sheet);
       } else {
@@ -240,6 +251,7 @@ void register_stretch(CLI::App& app) {
       throw;
     }
     if (!temp.empty()) {
+      knit::claim_run_output((std::filesystem::path(o->out) / "relaxed.kstate").string());
       std::filesystem::copy_file(temp, std::filesystem::path(o->out) / "relaxed.kstate",
                                  std::filesystem::copy_options::overwrite_existing);
       std::remove(temp.c_str());
@@ -247,33 +259,43 @@ void register_stretch(CLI::App& app) {
     if (o->use_sheet) {
       const auto& sh = result.report.summary["sheet"];
       std::cout << "status " << result.report.summary["status"].get<std::string>() << ": "
-                << result.curve.size() << " equilibria of the sheet (" << sh["nodes"] << " nodes), "
-                << sh["newton_iterations"] << " Newton iterations in "
-                << result.report.summary["wall_time_s"] << " s; outputs in " << o->out << "/\n";
+                << result.curve.size() << " equilibria of the sheet (" << quantity(sh["nodes"])
+                << " nodes), " << quantity(sh["newton_iterations"]) << " Newton iterations in "
+                << quantity(result.report.summary["wall_time_s"], "s") << "; outputs in " << o->out
+                << "/\n";
       if (!result.report.message.empty()) std::cerr << "knitsim: " << result.report.message << "\n";
       end_if_interrupted(result.report);
     } else {
       print_report(result.report, o->out);
       end_if_interrupted(result.report);
     }
-    const auto& m = result.report.summary["stretch"];
+    // not const: a measure the summary lacks reads as null ("not measured")
+    auto& m = result.report.summary["stretch"];
     // a pull that stopped (unstable) says where
     double reached = 0;
     for (const auto& s : result.curve) reached = std::max(reached, s.strain);
     if (m.contains("stopped"))
-      std::cout << "stopped at the load limit: " << m["stopped"]["force_moving_dyn"].get<double>()
-                << " dyn on the moving clamp (limit " << o->stretch.max_force << ") at strain "
-                << m["stopped"]["strain"].get<double>() << " of " << o->stretch.to_strain
-                << ", pulled " << o->direction;
+      std::cout << "stopped at the load limit: "
+                << quantity(m["stopped"]["force_moving_dyn"], "dyn")
+                << " on the moving clamp (limit " << quantity(o->stretch.max_force, "dyn")
+                << ") at strain " << quantity(m["stopped"]["strain"]) << " of "
+                << quantity(o->stretch.to_strain) << ", pulled " << o->direction;
     else if (result.report.status == knit::StepStatus::OK || result.curve.empty())
-      std::cout << "stretched " << o->direction << " to strain " << o->stretch.to_strain;
+      std::cout << "stretched " << o->direction << " to strain " << quantity(o->stretch.to_strain);
     else
-      std::cout << "stopped at strain " << reached << " of " << o->stretch.to_strain << " ("
+      std::cout << "stopped at strain " << quantity(reached) << " of "
+                << quantity(o->stretch.to_strain) << " ("
                 << result.report.summary.value("status", std::string("failed")) << "), pulled "
                 << o->direction;
-    std::cout << ": initial clamp separation " << result.initial_separation << " cm, max force "
-              << m["max_force_dyn"] << " dyn, stiffness " << m["stiffness_small_strain"] << " → "
-              << m["stiffness_end"] << " dyn per unit strain; stretch.csv in " << o->out << "/\n";
+    // the stiffnesses are slopes over a tenth of the pull: a short pull has too few
+    // samples for them (null in the summary)
+    const nlohmann::json k0 = m["stiffness_small_strain"], k1 = m["stiffness_end"];
+    std::string stiffness = "stiffness not measured (too few samples in the pull)";
+    if (k0.is_number() || k1.is_number())
+      stiffness = "stiffness " + quantity(k0) + " → " + quantity(k1) + " dyn per unit strain";
+    std::cout << ": initial clamp separation " << quantity(result.initial_separation, "cm")
+              << ", max force " << quantity(m["max_force_dyn"], "dyn") << ", " << stiffness
+              << "; stretch.csv in " << o->out << "/\n";
     if (result.report.status != knit::StepStatus::OK) throw RunFailed();
   });
 }

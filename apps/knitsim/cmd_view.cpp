@@ -15,7 +15,8 @@ namespace fs = std::filesystem;
 namespace {
 
 struct ViewArgs {
-  std::string input, out, title;
+  std::string input, out, title, scene;
+  bool no_objects = false;
   int every = 1;
   knit::ViewerOptions viewer;
 };
@@ -37,6 +38,7 @@ void run_view(ViewArgs a) {
     frames.push_back(knit::load_state(a.input));
     times.push_back(frames.back().state.time);
   }
+  a.viewer.objects = objects_for(a.input, a.scene, a.no_objects);
   a.viewer.title = a.title.empty() ? fs::path(a.input).filename().string() : a.title;
   if (a.viewer.title.empty()) a.viewer.title = "knitsim";
   knit::write_file_atomic(a.out, knit::viewer_html(frames, times, a.viewer));
@@ -59,6 +61,10 @@ void register_view(CLI::App& app) {
   add_integer(sub, "--samples", args->viewer.samples_per_segment,
               "points along each spline segment", 1, 64, "count per segment");
   add_integer(sub, "--sides", args->viewer.sides, "vertices around the tube", 3, 64, "count");
+  add_path(sub, "--scene", args->scene, "draw this scene's objects with the yarn",
+           "the scene a simulation's summary.json beside the input names")
+      ->check(existing_file());
+  sub->add_flag("--no-objects", args->no_objects, "draw the yarn alone");
   sub->callback([args] { run_view(*args); });
 }
 

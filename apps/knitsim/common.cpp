@@ -6,6 +6,8 @@
 #include <filesystem>
 #include <iostream>
 
+#include <tbb/info.h>
+
 #include "knit/io/export.hpp"
 #include "knit/io/states.hpp"
 #include "knit/model/params.hpp"
@@ -51,6 +53,12 @@ std::string command_line() {
 
 std::unique_ptr<tbb::global_control> make_thread_control(int threads) {
   if (threads <= 0) return nullptr;
+  // TBB runs no more workers than the machine has cores: say so rather than run fewer
+  // than asked in silence
+  const int cores = tbb::info::default_concurrency();
+  if (cores > 0 && threads > cores)
+    std::cerr << "knitsim: note: --threads " << threads << ": this machine runs " << cores
+              << (cores == 1 ? " thread" : " threads") << " at once; using " << cores << "\n";
   return std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
                                                static_cast<size_t>(threads));
 }
@@ -87,9 +95,8 @@ void export_run(const std::string& out_dir, const std::string& format,
 void print_report(const knit::RunReport& report, const std::string& out_dir) {
   const auto& s = report.summary;
   std::cout << "status " << s["status"].get<std::string>() << ": " << report.steps << " steps, "
-            << s["sim_time_s"].get<double>() << " s simulated in " << s["wall_time_s"].get<double>()
-            << " s wall (" << s["threads"].get<int>() << " threads); outputs in " << out_dir
-            << "/\n";
+            << quantity(s["sim_time_s"], "s") << " simulated in " << quantity(s["wall_time_s"], "s")
+            << " wall (" << s["threads"].get<int>() << " threads); outputs in " << out_dir << "/\n";
   if (report.status == knit::StepStatus::INTERRUPTED) {
     std::cerr << "knitsim: " << report.message << "; the state is in " << out_dir
               << "/final.kstate\n";
@@ -124,11 +131,14 @@ std::string resume_command(const std::string& out_dir,
   }
   args.push_back("--resume");
   args.push_back((std::filesystem::path(out_dir) / "final.kstate").string());
+  std::string command = join_quoted(g_program, args);
+  // a placeholder such as {time_left} is filled in later with a number, which needs no
+  // quotes: it stays bare
   for (const auto& [name, value] : replace) {
-    args.push_back(name);
-    args.push_back(value);
+    const bool placeholder = value.size() > 2 && value.front() == '{' && value.back() == '}';
+    command += " " + shell_quote(name) + " " + (placeholder ? value : shell_quote(value));
   }
-  return join_quoted(g_program, args);
+  return command;
 }
 
 void finish_run(const knit::RunReport& report, const std::string& out_dir,
@@ -148,6 +158,14 @@ void end_if_interrupted(const knit::RunReport& report) {
 
 void add_provenance(nlohmann::json& extra) {
   extra["command_line"] = command_line();
+}
+
+std::string quantity(const nlohmann::json& value, const std::string& unit) {
+  if (!value.is_number()) return "not measured";
+  if (value.is_number_integer()) return value.dump() + (unit.empty() ? "" : " " + unit);
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.4g", value.get<double>());
+  return unit.empty() ? std::string(buf) : std::string(buf) + " " + unit;
 }
 
 std::vector<std::shared_ptr<const knit::SceneObject>> objects_for(const std::string& input,

@@ -57,4 +57,8 @@ void end_if_interrupted(const knit::RunReport& report);
 /// Adds the summary's provenance fields (the command line) to `extra`.
 void add_provenance(nlohmann::json& extra);
 
+/// A summary's number for a line a user reads: 4 significant digits and the unit
+/// ("2874 dyn", "0.01234 cm"); "not measured" where the summary has null (or no number).
+std::string quantity(const nlohmann::json& value, const std::string& unit = "");
+
 }  // namespace knitsim

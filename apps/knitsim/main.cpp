@@ -3,9 +3,12 @@
 #include <exception>
 #include <iostream>
 #include <new>
+#include <string>
 
 #include "commands.hpp"
 #include "common.hpp"
+#include "knit/io/input_file.hpp"
+#include "knit/io/run_dir.hpp"
 #include "knit/solver/interrupt.hpp"
 
 int main(int argc, char** argv) {
@@ -26,9 +29,34 @@ int main(int argc, char** argv) {
   knitsim::register_version(app);
   app.footer(knitsim::help_footer());
   for (CLI::App* sub : app.get_subcommands({})) sub->footer(knitsim::help_footer());
+  // an output named "" would be no output at all: refused by every command alike
+  const CLI::Validator named(
+      [](std::string& s) {
+        return s.empty() ? std::string("the name is empty; give a file or directory") : "";
+      },
+      "", "not empty");
+  for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; }))
+    if (CLI::Option* out = sub->get_option_no_throw("--out")) out->check(named);
   // the first SIGINT/SIGTERM ends a run cleanly after its current step (state and summary
   // written); a second one ends the process at once
   knit::InterruptHandler interrupts;
+  // the run directories a command opens stay locked until it ends: its own outputs after
+  // the recipe's (a stretch's relaxed.kstate) are named in the directory's marker too
+  const knit::RunDirectoryScope run_directories;
+  // an unknown command is named (CLI11 says only that a subcommand is required)
+  if (argc > 1 && argv[1][0] != '-') {
+    std::string names;
+    bool known = false;
+    for (const CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) {
+      known = known || sub->get_name() == argv[1];
+      names += (names.empty() ? "" : ", ") + sub->get_name();
+    }
+    if (!known) {
+      std::cerr << "knitsim: error: unknown command '" << knit::printable(argv[1]) << "' (one of "
+                << names << "; knitsim --help says more)\n";
+      return knitsim::EXIT_ERROR;  // a command line refused (docs/cli.md, "Exit codes")
+    }
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

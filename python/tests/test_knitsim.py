@@ -569,3 +569,13 @@ def test_a_missing_file_raises_file_not_found_naming_the_keyword(saved_knit, tmp
     for call, kw in cases:
         with pytest.raises(FileNotFoundError, match=rf"^{kw}: .*missing"):
             call()
+
+
+def test_a_knitout_program_of_any_name_is_read_as_knitout(tmp_path):
+    # known by its ;!knitout- header, not its extension: a 4 x 4 program named .txt relaxes
+    # at its own size (a chart reader would call its ';' an unknown stitch)
+    program = tmp_path / "garter.txt"
+    program.write_text((pathlib.Path(__file__).parents[2] / "tests" / "data" / "yarns" /
+                        "swatch4x4garter.k").read_text())
+    k = knitsim.relax(str(program), max_time=0.001)
+    assert k.model.knit["rows"] == 4 and k.model.knit["cols"] == 4

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -464,7 +465,7 @@ TEST(Cli, RunDirectoriesAreNeverMixed) {
   EXPECT_TRUE(fs::exists(out + "/frames/state_000001.kstate"));
   const Result relax = run("relax garter --rows 2 --cols 2 --max-time 0.001 --quiet --out " + out);
   EXPECT_EQ(relax.code, 1);
-  EXPECT_NE(relax.output.find("already holds files"), std::string::npos) << relax.output;
+  EXPECT_NE(relax.output.find("already holds an earlier run's files"), std::string::npos) << relax.output;
   for (const char* bad : {"/", "~"}) {
     const Result r = run("simulate " + pendulum + " --duration 0.001 --overwrite --out " + bad);
     EXPECT_EQ(r.code, 1) << bad;
@@ -792,6 +793,46 @@ TEST(Cli, ViewWritesAPageForARunAndRefusesAnotherName) {
   EXPECT_EQ(bad.code, 1);
   EXPECT_NE(bad.output.find("name it .html"), std::string::npos) << bad.output;
   EXPECT_FALSE(fs::exists(out + "/run.png"));
+}
+
+// the objects of the page's data (viewer.hpp), by name
+std::vector<std::string> page_objects(const std::string& page) {
+  std::ifstream in(page);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  const std::string html = ss.str(), open = "id=\"knitsim-data\">";
+  const size_t begin = html.find(open) + open.size();
+  const auto d = nlohmann::json::parse(html.substr(begin, html.find("</script>", begin) - begin));
+  std::vector<std::string> names;
+  for (const auto& o : d["objects"]) names.push_back(o["name"]);
+  return names;
+}
+
+// view draws a run's objects as render does: those of the scene its summary.json names, or
+// of --scene; --no-objects leaves them out
+TEST(Cli, ViewDrawsTheScenesObjects) {
+  const std::string out = temp_dir("cli_view_objects");
+  fs::create_directories(out);
+  const std::string scene = out + "/ball.json";
+  std::ofstream(scene)
+      << R"({"yarns": [{"line": {"from": [-2,0,1.2], "to": [2,0,1.2], "segments": 8}}],
+    "objects": [{"name": "ball", "sphere": {"center": [0,0,0], "radius": 1}},
+                {"name": "floor", "plane": {"point": [0,0,-1], "normal": [0,0,1]}}],
+    "time_step": 0.0001, "duration": 0.002, "output_every": 10})";
+  ASSERT_EQ(run("simulate " + scene + " --quiet --out " + out + "/run").code, 0);
+  Result r = run("view " + out + "/run --out " + out + "/run.html");
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("with the objects of " + scene), std::string::npos) << r.output;
+  EXPECT_EQ(page_objects(out + "/run.html"), (std::vector<std::string>{"ball", "floor"}));
+  r = run("view " + out + "/run --no-objects --out " + out + "/alone.html");
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_TRUE(page_objects(out + "/alone.html").empty());
+  const std::string ex = KNIT_EXAMPLES;
+  r = run("view " + ex + "/knits/stockinette_12x12.kstate --scene " + ex +
+          "/drape_sphere.json --out " + out + "/drape.html");
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_EQ(page_objects(out + "/drape.html"), (std::vector<std::string>{"ball", "floor"}));
+  fs::remove_all(out);
 }
 
 }  // namespace

@@ -367,6 +367,8 @@ void interrupt_and_resume(const std::string& name, const std::string& args, int 
   // the summary's command, as a user would paste it (knitsim from the build)
   std::string cmd = s["resume_command"];
   ASSERT_EQ(cmd.rfind("knitsim ", 0), 0u) << cmd;
+  // nothing in it needs quotes (a number of time left least of all: issue 51)
+  EXPECT_EQ(cmd.find('\''), std::string::npos) << cmd;
   const Result r = run(cmd.substr(8));
   ASSERT_EQ(r.code, 0) << cmd << "\n" << r.output;
   EXPECT_EQ(read_bytes(dir + "/whole/" + final_name).substr(0, 64),

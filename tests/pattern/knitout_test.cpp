@@ -2,6 +2,8 @@
 // generator cannot knit refused with the line and instruction.
 #include <gtest/gtest.h>
 
+#include <fstream>
+#include <iterator>
 #include <string>
 
 #include "knit/pattern/knitout.hpp"
@@ -111,8 +113,9 @@ TEST(Knitout, WhatCannotBeKnitYetIsRefusedWithItsLine) {
       {head + "knit - x2 3\n", "expected a needle such as f12 or b3, got 'x2'"},
       {head + "knit ^ f2 3\n", "expected 'knit +|- NEEDLE CARRIER'"},
       {head + "frobnicate\n", "prog.k:5: 'frobnicate': unknown instruction 'frobnicate'"},
-      {head + "knit - f2 3\n", "prog.k:5: the last row has 1 of the piece's 2 stitches"},
-      {head + "knit - f2 3\nknit - f2 3\n", "prog.k:6: 'knit f2': row 1 does not go over"},
+      {head + "knit - f2 3\n",
+       "prog.k:5: 'knit - f2 3': the last row has 1 of the piece's 2 stitches"},
+      {head + "knit - f2 3\nknit - f2 3\n", "prog.k:6: 'knit - f2 3': row 1 does not go over"},
       {";!knitout-2\nin 3\n", "prog.k:2: the program knits no stitches"},
       {";!knitout-2\nknit + f1 3\nknit + f2 3\nknit - b1 3\n",
        "a tube needs its needles on both beds"},
@@ -121,6 +124,24 @@ TEST(Knitout, WhatCannotBeKnitYetIsRefusedWithItsLine) {
     const std::string got = refusal(c.program);
     EXPECT_NE(got.find(c.expect), std::string::npos) << c.program << "\n→ " << got;
   }
+  // a mistyped needle (f-3 for f1, a column of its own) is named on its own line, not on
+  // the rows it shifts; a row that starts inside the piece is named at its start
+  const std::string three = ";!knitout-2\nin 3\n";
+  std::string typo = three, inside = three;
+  for (int r = 0; r < 4; ++r)
+    for (int k = 1; k <= 3; ++k) {
+      const int needle = r % 2 == 0 ? k : 4 - k;
+      const std::string dir = r % 2 == 0 ? "+" : "-";
+      typo += "knit " + dir + " f" + (r == 1 && k == 3 ? "-3" : std::to_string(needle)) + " 3\n";
+      inside += "knit " + dir + " f" + std::to_string(r == 2 && k == 1 ? 2 : needle) + " 3\n";
+    }
+  EXPECT_NE(refusal(typo).find("prog.k:8: 'knit - f-3 3': needle f-3 knits 1 stitch"),
+            std::string::npos)
+      << refusal(typo);
+  EXPECT_NE(refusal(inside).find("prog.k:9: 'knit + f2 3': row 2 starts at needle f2, not at an "
+                                 "edge of the piece (f1 or f3)"),
+            std::string::npos)
+      << refusal(inside);
   // machine settings do not change what is knitted
   EXPECT_EQ(refusal(head + "x-stitch-number 5\npause\nstitch 30 40\nmiss - f3 3\n"), "(accepted)");
 }
@@ -148,6 +169,35 @@ TEST(Knitout, AProgramIsRelaxedAtItsOwnSize) {
   const RelaxResult r = relax_knit(YARNS + "swatch4x4garter.k", o);
   EXPECT_EQ(r.model.knit->pattern, YARNS + "swatch4x4garter.k");
   EXPECT_EQ(r.report.status, StepStatus::OK);
+}
+
+// A knitout program is known by its header, whatever its name: a chart reader would call
+// its first ';' an unknown stitch
+TEST(Knitout, AProgramIsKnownByItsHeaderWhateverItsName) {
+  std::ifstream in(YARNS + "swatch4x4garter.k");
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string dir = ::testing::TempDir();
+  for (const std::string name : {"garter.txt", "garter.knitout", "garter"}) {
+    std::ofstream(dir + "/" + name) << text;
+    EXPECT_TRUE(is_knitout_path(dir + "/" + name)) << name;
+    EXPECT_EQ(load_pattern(dir + "/" + name).rows,
+              load_knitout(YARNS + "swatch4x4garter.k").pattern.rows)
+        << name;
+  }
+  std::ofstream(dir + "/bom.txt") << "\xEF\xBB\xBF" << text;
+  EXPECT_TRUE(is_knitout_path(dir + "/bom.txt"));
+  // a chart, a missing file, a directory and a device are not programs (and not opened)
+  std::ofstream(dir + "/chart.txt") << "kp\npk\n";
+  EXPECT_FALSE(is_knitout_path(dir + "/chart.txt"));
+  EXPECT_EQ(load_pattern(dir + "/chart.txt").num_cols(), 2);
+  EXPECT_FALSE(is_knitout_path(dir + "/no_such_file"));
+  EXPECT_FALSE(is_knitout_path(dir));
+  EXPECT_FALSE(is_knitout_path("/dev/zero"));
+  // and the size check of a relaxation reads it as a program too
+  KnitOptions k;
+  k.rows = 4;
+  k.cols = 5;
+  EXPECT_THROW(check_knitout_size(dir + "/garter.txt", k), std::invalid_argument);
 }
 
 }  // namespace

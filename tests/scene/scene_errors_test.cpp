@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "knit/objects/object.hpp"
+#include "knit/scene/json_reader.hpp"
 #include "knit/scene/scene.hpp"
 
 #include <fstream>
@@ -147,6 +148,51 @@ TEST(SceneErrors, MalformedJsonNamesLineAndColumn) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
   }
+}
+
+// parsing is strict (docs/scene-format.md): a key given twice in one object is refused at
+// its second place, named by field path, line and column; the same key in two objects is
+// not a duplicate; the parser library's words are translated
+TEST(SceneErrors, AKeyGivenTwiceIsRefusedWhereItIsGivenAgain) {
+  auto error = [](const std::string& text) {
+    try {
+      parse_json_text(text, "s.json");
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("(accepted)");
+  };
+  EXPECT_EQ(error(R"({"a": {"b": 1}, "c": [{"b": 2}, {"b": 3}], "b": 4})"), "(accepted)");
+  EXPECT_EQ(error("{\"yarns\": [{\"line\": {}},\n  {\"line\": {\"from\": 1, \"from\": 2}}]}"),
+            "s.json:2:24: yarns[1].line.from: the key \"from\" is given twice in one object "
+            "(each key may appear once)");
+  EXPECT_NE(error(R"({"a": [[1, 2], {"x": 1, "x": 1}]})").find("a[1].x"), std::string::npos);
+  // a key with bytes beyond ASCII is shown escaped
+  const std::string accent = error("{\"\xc3\xa9k\": 1, \"\xc3\xa9k\": 2}");
+  EXPECT_NE(accent.find("\"\\xC3\\xA9k\" is given twice"), std::string::npos) << accent;
+  const std::string syntax = error("{\"a\": tru}");
+  EXPECT_EQ(syntax.rfind("s.json:1:", 0), 0u) << syntax;
+  EXPECT_NE(syntax.find("malformed JSON: invalid literal"), std::string::npos) << syntax;
+  for (const char* library : {"json.exception", "parse error at", "syntax error while"})
+    EXPECT_EQ(syntax.find(library), std::string::npos) << syntax;
+  EXPECT_EQ(error("").find("json.exception"), std::string::npos);
+}
+
+TEST(SceneErrors, NumbersOutOfRangeAreNamedWithTheirValue) {
+  expect_error(R"({"yarns": [{"line": {"from": [0,0,0], "to": [1,0,0], "segments": 2147483648}}]})",
+               {"yarns[0].line.segments", "expected an integer from 1 to 200000, got 2147483648"});
+  expect_error(R"({"yarns": [{"points": [[0,0,0],[1e300,0,0],[2,0,0],[3,0,0]]}]})",
+               {"yarns[0].points[1][0]", "within ±1e+06 cm, got 1e+300"});
+  expect_error(R"({"yarns": [{"points": [[0,0,0],[0,0,0],[0,0,0],[0,0,0],[1,0,0]]}]})",
+               {"yarns[0]", "segment 0 has zero length"});
+  expect_error(scene_with(R"(, "pins": [{"yarn": 0, "segment": 0, "t": -0.5}])"),
+               {"pins[0].t", "expected t in [0, 1], got -0.5"});
+  expect_error(scene_with(R"(, "output_every": 0)"), {"output_every", "got 0"});
+  expect_error(scene_with(R"(, "params": {"quadrature_points": 4})"), {"odd", "got 4"});
+  expect_error(scene_with(R"(, "params": {"alpha_large": 1.5})"),
+               {"params.alpha_large", "got 1.5"});
+  expect_error(scene_with(R"(, "objects": [{"box": {"size": [1, 0, 3]}}])"),
+               {"objects[0].box.size[1]", "got 0"});
 }
 
 TEST(SceneErrors, BadObjectsAreNamed) {

@@ -1,5 +1,7 @@
 #include "knit/analysis/rest_reference.hpp"
 
+#include "knit/io/input_file.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <fstream>
@@ -20,7 +22,7 @@ nlohmann::json read_rest_reference(const std::string& dir, const std::string& pa
   try {
     s = nlohmann::json::parse(in);
   } catch (const nlohmann::json::exception& e) {
-    fail(std::string("not JSON (") + e.what() + ")");
+    fail("not JSON (" + json_library_message(e.what()) + ")");
   }
   if (!s.is_object() || !s.contains("pattern") || !s.contains("relaxed") || !s.contains("rows") ||
       !s.contains("cols"))

@@ -1,5 +1,6 @@
 #include "knit/io/input_file.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -21,6 +22,29 @@ std::string format_bytes(double bytes) {
   else
     std::snprintf(buf, sizeof buf, "%.1f GB", bytes / (1024.0 * 1024 * 1024));
   return buf;
+}
+
+std::string printable(std::string_view text, std::size_t max_bytes) {
+  std::string out;
+  const std::size_t n = std::min(text.size(), max_bytes);
+  for (std::size_t k = 0; k < n; ++k) {
+    const auto c = static_cast<unsigned char>(text[k]);
+    if (c >= 0x20 && c < 0x7f) {
+      out += static_cast<char>(c);
+    } else {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\x%02X", c);
+      out += buf;
+    }
+  }
+  if (text.size() > max_bytes) out += "…";
+  return out;
+}
+
+std::string json_library_message(std::string_view what) {
+  if (what.substr(0, 16) == "[json.exception." && what.find("] ") != std::string_view::npos)
+    what.remove_prefix(what.find("] ") + 2);
+  return printable(what, 200);
 }
 
 double available_memory_bytes() {

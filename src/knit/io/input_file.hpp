@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 
 namespace knit {
 
@@ -14,6 +15,7 @@ inline constexpr std::size_t MAX_SCENE_BYTES = 64ull << 20;    ///< scene JSON
 inline constexpr std::size_t MAX_CHART_BYTES = 1ull << 20;     ///< knit chart
 inline constexpr std::size_t MAX_GEOMETRY_BYTES = 1ull << 30;  ///< .yarns/.bcc/.obj
 inline constexpr std::size_t MAX_STATE_BYTES = 4ull << 30;     ///< .kstate
+inline constexpr std::size_t MAX_CSV_BYTES = 1ull << 30;       ///< a CSV to plot
 
 /// A file that is not there (read_input_file, check_input_path): the Python module raises
 /// FileNotFoundError for it, the command line exits as for any refused input.
@@ -38,5 +40,14 @@ double available_memory_bytes();
 
 /// A byte count for messages: "512 B", "3.2 MB", "1.5 GB".
 std::string format_bytes(double bytes);
+
+/// `text` as a message may show it: bytes that do not print (control characters, binary
+/// data, bytes beyond ASCII) as \xNN, and at most `max_bytes` of it, then "…".
+std::string printable(std::string_view text, std::size_t max_bytes = 40);
+
+/// A JSON library exception's text without the library's tag: "[json.exception.
+/// type_error.302] type must be string, but is number" → "type must be string, but is
+/// number", printable and at most 200 bytes.
+std::string json_library_message(std::string_view what);
 
 }  // namespace knit

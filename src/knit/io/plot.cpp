@@ -3,6 +3,7 @@
 #include <stdlib.h>
 #include <cctype>
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdlib>
@@ -12,7 +13,9 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "knit/io/input_file.hpp"
 #include "knit/io/process.hpp"
+#include "knit/io/run_dir.hpp"
 #include "knit/io/state_file.hpp"
 
 namespace knit {
@@ -118,6 +121,7 @@ std::string plot_script(const std::string& out_tmp, const std::string& title,
 void render_plot(const std::string& gnuplot, const TempDir& tmp, const std::string& out,
                  const std::string& title, const std::string& body) {
   const std::string out_tmp = out + ".tmp";
+  claim_run_output(out);  // and so out_tmp
   const std::string script = (tmp.path / (fs::path(out).stem().string() + ".gp")).string();
   write_file_atomic(script, plot_script(out_tmp, title, body));
   try {
@@ -150,13 +154,26 @@ int CsvTable::column(const std::string& name, const std::string& file) const {
   throw std::runtime_error(file + ": line 1: missing column '" + name + "'");
 }
 
+void check_plot_path(const std::string& path, const std::string& option) {
+  std::string ext = fs::path(path).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (ext == ".png") return;
+  throw std::invalid_argument((option.empty() ? "" : option + " ") + printable(path, 200) +
+                              ": plots are written as PNG images: name it .png");
+}
+
 CsvTable read_csv(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(path + ": cannot open CSV file");
+  // a regular file of bounded size (a device such as /dev/zero would be read forever)
+  const std::string text = read_input_file(path, MAX_CSV_BYTES, "CSV file");
+  // what the messages show of the file: printable, and short (a binary file is one long
+  // "line" of bytes)
+  auto shown = [](const std::string& cell) { return printable(cell, 40); };
   CsvTable t;
-  std::string line;
-  size_t line_no = 0;
-  while (std::getline(in, line)) {
+  size_t line_no = 0, pos = 0;
+  while (pos < text.size()) {
+    const size_t end = std::min(text.find('\n', pos), text.size());
+    const std::string line = text.substr(pos, end - pos);
+    pos = end + 1;
     ++line_no;
     if (trim(line).empty()) continue;
     std::vector<std::string> cells = split(line);
@@ -179,7 +196,7 @@ CsvTable read_csv(const std::string& path) {
       const auto res = std::from_chars(s.data(), s.data() + s.size(), v);
       if (s.empty() || res.ec != std::errc() || res.ptr != s.data() + s.size())
         throw std::runtime_error(path + ": line " + std::to_string(line_no) + ": column '" +
-                                 t.columns[c] + "': '" + s + "' is not a number");
+                                 shown(t.columns[c]) + "': '" + shown(s) + "' is not a number");
       row.push_back(v);
     }
     t.rows.push_back(std::move(row));
@@ -332,6 +349,7 @@ std::string plot_csv(const std::string& csv, const std::string& out_png) {
     throw std::runtime_error("plot: gnuplot is not on PATH (install the gnuplot-nox package)");
   const std::string out =
       out_png.empty() ? fs::path(csv).replace_extension(".png").string() : out_png;
+  check_plot_path(out);
   TempDir tmp(fs::path(csv).parent_path());
   const std::string dat = (tmp.path / "data.dat").string();
   write_data(t, dat);
@@ -355,6 +373,7 @@ std::string plot_series(const std::vector<PlotSeries>& series, const std::string
                         const std::string& ylabel, const std::string& title,
                         const std::string& out_png) {
   if (series.empty()) throw std::invalid_argument("plot: no curves to draw");
+  check_plot_path(out_png);
   const std::string gnuplot = find_gnuplot();
   if (gnuplot.empty())
     throw std::runtime_error("plot: gnuplot is not on PATH (install the gnuplot-nox package)");

@@ -15,9 +15,14 @@ struct CsvTable {
   int column(const std::string& name, const std::string& file) const;
 };
 
-/// Reads a numeric CSV (comma separated, header first, blank lines skipped). Throws
-/// std::runtime_error naming the file and line on malformed input.
+/// Reads a numeric CSV (comma separated, header first, blank lines skipped), a regular file
+/// of at most MAX_CSV_BYTES. Throws std::runtime_error naming the file and line on malformed
+/// input, with what it quotes of the file printable and short.
 CsvTable read_csv(const std::string& path);
+
+/// Throws std::invalid_argument (naming `option`, when given, and the path) unless `path`
+/// ends in .png: plots are PNG images, and a PNG under another name would mislead.
+void check_plot_path(const std::string& path, const std::string& option = "");
 
 /// "displacement_cm" → "displacement (cm)", "kinetic_energy" → "kinetic energy": a
 /// trailing known unit token (cm, s, g, dyn, erg, …) becomes a parenthesised unit.

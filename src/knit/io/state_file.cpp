@@ -2,6 +2,7 @@
 
 #include "knit/io/byte_reader.hpp"
 #include "knit/io/input_file.hpp"
+#include "knit/io/run_dir.hpp"
 
 #include <cmath>
 #include <cstdint>
@@ -168,6 +169,7 @@ void write_file_atomic(const std::string& path, const std::string& contents) {
   namespace fs = std::filesystem;
   const fs::path target(path);
   const fs::path tmp = target.parent_path() / (target.filename().string() + ".tmp");
+  claim_run_output(path);  // a run directory's marker names it (and so its NAME.tmp)
   {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
     if (!out) throw std::runtime_error(path + ": cannot open for writing");
@@ -324,6 +326,8 @@ StateFile read_state_file(const std::string& path) {
       k.cast_on = info.value("cast_on", false);    // and since cast-ons exist
       // and how it was being relaxed, since `relax --resume` goes on that way
       if (info.contains("relaxation")) k.relaxation = parse_relaxation(info.at("relaxation"));
+    } catch (const nlohmann::json::exception& e) {
+      r.fail("bad knit description: " + json_library_message(e.what()));
     } catch (const std::exception& e) {
       r.fail(std::string("bad knit description: ") + e.what());
     }

@@ -9,6 +9,8 @@
 #include <stdexcept>
 
 #include "knit/io/states.hpp"
+#include "knit/objects/mesh_shape.hpp"
+#include "knit/render/render.hpp"
 
 namespace knit {
 
@@ -30,6 +32,22 @@ std::string base64(const unsigned char* data, size_t size) {
   return out;
 }
 
+// nothing in a script may end the <script> element early
+std::string script_safe(std::string s) {
+  for (size_t at = 0; (at = s.find("</script", at)) != std::string::npos; at += 2)
+    s.replace(at, 2, "<\\/");
+  return s;
+}
+
+// nor in the page's JSON data, where the objects' names are the user's: a '<' can only be
+// inside one of its strings, where \u003c is the same character
+std::string json_safe(const std::string& json) {
+  std::string out;
+  out.reserve(json.size());
+  for (char c : json) out += c == '<' ? std::string("\\u003c") : std::string(1, c);
+  return out;
+}
+
 std::string read_script(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in)
@@ -37,11 +55,60 @@ std::string read_script(const std::filesystem::path& path) {
                              " is missing: install Debian's libjs-three (scripts/setup.sh does)");
   std::stringstream ss;
   ss << in.rdbuf();
-  std::string s = ss.str();
-  // nothing in a script may end the <script> element early
-  for (size_t at = 0; (at = s.find("</script", at)) != std::string::npos; at += 2)
-    s.replace(at, 2, "<\\/");
-  return s;
+  return script_safe(ss.str());
+}
+
+template <class T>
+std::string base64_of(const std::vector<T>& values) {
+  return base64(reinterpret_cast<const unsigned char*>(values.data()), values.size() * sizeof(T));
+}
+
+// Grid cells along an object's box diagonal for its surface on the page: a sphere is about 55
+// cells across, smooth with the page's vertex normals, and a floor's slab a few thousand
+// triangles.
+constexpr double OBJECT_CELLS = 96;
+
+// The objects for the page (viewer.js): each one's surface in its own frame at the first
+// time, where it lies within `region` (world, cm), and its pose per frame (one when it does
+// not move). Objects wholly outside the region are left out. Adds their size to `bytes`.
+nlohmann::json page_objects(const std::vector<std::shared_ptr<const SceneObject>>& objects,
+                            const std::vector<double>& times, const Eigen::AlignedBox3d& region,
+                            long long& bytes) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const auto& object : objects) {
+    const ObjectFrame f0(*object, times.front());
+    Eigen::AlignedBox3d local;
+    for (int c = 0; c < 8; ++c)
+      local.extend(f0.rotation().transpose() *
+                   (region.corner(static_cast<Eigen::AlignedBox3d::CornerType>(c)) - f0.origin()));
+    const Eigen::AlignedBox3d inside = local.intersection(object->shape->bounds());
+    if (inside.isEmpty() || !inside.diagonal().allFinite()) continue;
+    const TriangleMesh mesh =
+        surface_mesh(*object->shape, local, inside.diagonal().norm() / OBJECT_CELLS);
+    if (mesh.triangles.empty()) continue;
+    std::vector<float> vertices;
+    vertices.reserve(3 * mesh.vertices.size());
+    for (const Eigen::Vector3d& v : mesh.vertices)
+      for (int k = 0; k < 3; ++k) vertices.push_back(static_cast<float>(v[k]));
+    std::vector<uint32_t> triangles;
+    triangles.reserve(3 * mesh.triangles.size());
+    for (const Eigen::Vector3i& t : mesh.triangles)
+      for (int k = 0; k < 3; ++k) triangles.push_back(static_cast<uint32_t>(t[k]));
+    nlohmann::json poses = nlohmann::json::array();
+    for (size_t f = 0; f < (object->moving() ? times.size() : 1); ++f) {
+      const ObjectFrame at(*object, times[f]);
+      const Eigen::Quaterniond r(at.rotation());
+      poses.push_back(
+          {at.origin().x(), at.origin().y(), at.origin().z(), r.x(), r.y(), r.z(), r.w()});
+    }
+    bytes += static_cast<long long>((vertices.size() + triangles.size()) * 4 * 4 / 3 +
+                                    poses.size() * 7 * 24);
+    out.push_back({{"name", object->name},
+                   {"vertices", base64_of(vertices)},
+                   {"triangles", base64_of(triangles)},
+                   {"poses", poses}});
+  }
+  return out;
 }
 
 std::string html_escape(const std::string& text) {
@@ -61,190 +128,10 @@ std::string html_escape(const std::string& text) {
   return out;
 }
 
-// The page's own script: decode the frames, build a tube per yarn, update it per frame.
-const char* const VIEWER_JS = R"JS(
-"use strict";
-const data = JSON.parse(document.getElementById("knitsim-data").textContent);
-function decode(b64) {
-  const bin = atob(b64);
-  const bytes = new Uint8Array(bin.length);
-  for (let i = 0; i < bin.length; ++i) bytes[i] = bin.charCodeAt(i);
-  return new Float32Array(bytes.buffer);
-}
-const Q = decode(data.positions);
-const NCP = data.counts.reduce((a, b) => a + b, 0);
-const S = data.samples, SIDES = data.sides;
-const PALETTE = [[0.80, 0.36, 0.25], [0.88, 0.66, 0.30], [0.45, 0.62, 0.38],
-                 [0.30, 0.52, 0.72], [0.55, 0.40, 0.68], [0.78, 0.45, 0.58]];
-
-const canvas = document.getElementById("view");
-const renderer = new THREE.WebGLRenderer({canvas: canvas, antialias: true,
-                                          preserveDrawingBuffer: true});
-renderer.setPixelRatio(window.devicePixelRatio || 1);
-const scene = new THREE.Scene();
-scene.background = new THREE.Color(0xf4f1ea);
-scene.add(new THREE.HemisphereLight(0xffffff, 0x8a8070, 0.75));
-const sun = new THREE.DirectionalLight(0xffffff, 0.75);
-scene.add(sun);
-const camera = new THREE.PerspectiveCamera(35, 1, 0.01, 1e5);
-camera.up.set(0, 0, 1);  // knitsim's +z is up (see below for flat knits)
-
-// one tube per yarn: rings of SIDES vertices around S samples per segment
-const yarns = [];
-let cpBegin = 0, segBegin = 0;
-for (let y = 0; y < data.counts.length; ++y) {
-  const n = data.counts[y], nseg = n - 3, ns = nseg * S + 1;
-  const pos = new Float32Array(ns * SIDES * 3), nrm = new Float32Array(ns * SIDES * 3);
-  const col = new Float32Array(ns * SIDES * 3);
-  for (let k = 0; k < ns; ++k) {
-    const seg = segBegin + Math.min(Math.floor(k / S), nseg - 1);
-    const key = data.rows.length ? data.rows[seg] : y;
-    const c = PALETTE[((key % 6) + 6) % 6];
-    for (let s = 0; s < SIDES; ++s) col.set(c, 3 * (k * SIDES + s));
-  }
-  const index = [];
-  for (let k = 0; k + 1 < ns; ++k)
-    for (let s = 0; s < SIDES; ++s) {
-      const a = k * SIDES + s, b = k * SIDES + (s + 1) % SIDES, c = a + SIDES, d = b + SIDES;
-      index.push(a, b, d, a, d, c);
-    }
-  const geom = new THREE.BufferGeometry();
-  geom.setIndex(index);
-  geom.setAttribute("position", new THREE.BufferAttribute(pos, 3));
-  geom.setAttribute("normal", new THREE.BufferAttribute(nrm, 3));
-  geom.setAttribute("color", new THREE.BufferAttribute(col, 3));
-  const mesh = new THREE.Mesh(geom, new THREE.MeshStandardMaterial(
-      {vertexColors: THREE.VertexColors, roughness: 0.85, metalness: 0.0}));
-  scene.add(mesh);
-  yarns.push({geom: geom, pos: pos, nrm: nrm, cp: cpBegin, nseg: nseg, ns: ns,
-              r: data.radius[y], p: new Float64Array(ns * 3)});
-  cpBegin += n;
-  segBegin += nseg;
-}
-
-// the cubic B-spline's samples, then rings carried along by parallel transport
-function setFrame(f) {
-  const base = f * 3 * NCP;
-  for (const Y of yarns) {
-    const p = Y.p;
-    for (let k = 0; k < Y.ns; ++k) {
-      const i = Math.min(Math.floor(k / S), Y.nseg - 1), t = k / S - i;
-      const t2 = t * t, t3 = t2 * t;
-      const b = [(1 - t) * (1 - t) * (1 - t) / 6, (3 * t3 - 6 * t2 + 4) / 6,
-                 (-3 * t3 + 3 * t2 + 3 * t + 1) / 6, t3 / 6];
-      for (let c = 0; c < 3; ++c) {
-        let v = 0;
-        for (let j = 0; j < 4; ++j) v += b[j] * Q[base + 3 * (Y.cp + i + j) + c];
-        p[3 * k + c] = v;
-      }
-    }
-    let ux = 0, uy = 0, uz = 0;
-    for (let k = 0; k < Y.ns; ++k) {
-      const a = Math.max(k - 1, 0), e = Math.min(k + 1, Y.ns - 1);
-      let tx = p[3 * e] - p[3 * a], ty = p[3 * e + 1] - p[3 * a + 1], tz = p[3 * e + 2] - p[3 * a + 2];
-      const tl = Math.hypot(tx, ty, tz) || 1;
-      tx /= tl; ty /= tl; tz /= tl;
-      if (k === 0) {  // any normal to start
-        if (Math.abs(tx) < 0.9) { ux = 0; uy = tz; uz = -ty; } else { ux = -tz; uy = 0; uz = tx; }
-      }
-      const d = ux * tx + uy * ty + uz * tz;
-      ux -= d * tx; uy -= d * ty; uz -= d * tz;
-      const ul = Math.hypot(ux, uy, uz) || 1;
-      ux /= ul; uy /= ul; uz /= ul;
-      const wx = ty * uz - tz * uy, wy = tz * ux - tx * uz, wz = tx * uy - ty * ux;
-      for (let s = 0; s < SIDES; ++s) {
-        const ang = 2 * Math.PI * s / SIDES, ca = Math.cos(ang), sa = Math.sin(ang);
-        const nx = ca * ux + sa * wx, ny = ca * uy + sa * wy, nz = ca * uz + sa * wz;
-        const o = 3 * (k * SIDES + s);
-        Y.pos[o] = p[3 * k] + Y.r * nx;
-        Y.pos[o + 1] = p[3 * k + 1] + Y.r * ny;
-        Y.pos[o + 2] = p[3 * k + 2] + Y.r * nz;
-        Y.nrm[o] = nx; Y.nrm[o + 1] = ny; Y.nrm[o + 2] = nz;
-      }
-    }
-    Y.geom.attributes.position.needsUpdate = true;
-    Y.geom.attributes.normal.needsUpdate = true;
-    Y.geom.computeBoundingSphere();
-  }
-  const time = data.times[f];
-  document.getElementById("time").textContent =
-      "t = " + time.toFixed(3) + " s   (frame " + (f + 1) + " of " + data.times.length + ")";
-}
-
-// the camera frames every frame (the control points' box holds the curves): a flat knit
-// (thin in z) from its front face, a little tilted, with its wale up; anything else from the
-// front and above, z up
-const box = new THREE.Box3();
-const rmax = Math.max.apply(null, data.radius);
-for (let i = 0; i + 2 < Q.length; i += 3)
-  box.expandByPoint(new THREE.Vector3(Q[i], Q[i + 1], Q[i + 2]));
-box.expandByScalar(rmax);
-const centre = box.getCenter(new THREE.Vector3()), size = box.getSize(new THREE.Vector3());
-const extent = Math.max(size.x, size.y, size.z, 1e-3);
-const flat = size.z < 0.5 * Math.min(size.x, size.y);
-if (flat) camera.up.set(0, 1, 0);
-// far enough that the box's width and height fit the view, with a margin
-function frameCamera() {
-  const tan = Math.tan(camera.fov * Math.PI / 360);
-  const w = flat ? size.x : Math.hypot(size.x, size.y), h = flat ? size.y : size.z + 0.5 * size.y;
-  const d = 1.15 * Math.max(h / 2, w / 2 / camera.aspect) / tan + (flat ? size.z : 0.5 * extent);
-  const dir = flat ? new THREE.Vector3(0.12, -0.25, 1) : new THREE.Vector3(0.2, -1.9, 0.9);
-  dir.normalize();
-  camera.position.copy(centre).addScaledVector(dir, d);
-}
-camera.near = extent / 100;
-camera.far = extent * 100;
-sun.position.set(centre.x + extent, centre.y - 2 * extent, centre.z + 3 * extent);
-const controls = new THREE.OrbitControls(camera, canvas);
-controls.target.copy(centre);
-controls.update();
-
-const slider = document.getElementById("frame");
-slider.max = String(data.times.length - 1);
-let frame = 0, playing = false, clock = null;
-function show(f) {
-  frame = f;
-  slider.value = String(f);
-  setFrame(f);
-  draw();
-}
-function resize() {
-  const w = canvas.clientWidth, h = canvas.clientHeight;
-  renderer.setSize(w, h, false);
-  camera.aspect = w / Math.max(h, 1);
-  camera.updateProjectionMatrix();
-}
-function draw() { renderer.render(scene, camera); }
-slider.addEventListener("input", () => { playing = false; updateButton(); show(Number(slider.value)); });
-controls.addEventListener("change", draw);
-window.addEventListener("resize", () => { resize(); draw(); });
-const button = document.getElementById("play");
-function updateButton() { button.textContent = playing ? "pause" : "play"; }
-button.addEventListener("click", () => {
-  playing = !playing && data.times.length > 1;
-  if (playing && frame === data.times.length - 1) show(0);
-  clock = null;
-  updateButton();
-  if (playing) requestAnimationFrame(tick);
-});
-// playback at the simulation's real time (times in seconds), looping
-function tick(now) {
-  if (!playing) return;
-  if (clock === null) clock = {wall: now, sim: data.times[frame]};
-  const sim = clock.sim + (now - clock.wall) / 1000 * data.speed;
-  let f = frame;
-  while (f + 1 < data.times.length && data.times[f + 1] <= sim) ++f;
-  if (f === data.times.length - 1 && sim > data.times[f]) { show(f); playing = false; updateButton(); return; }
-  if (f !== frame) show(f);
-  requestAnimationFrame(tick);
-}
-resize();
-frameCamera();
-controls.update();
-const wanted = /frame=(\d+)/.exec(window.location.hash);
-show(wanted ? Math.min(Number(wanted[1]), data.times.length - 1) : 0);
-window.knitsimReady = true;
-)JS";
+// The page's own script (src/knit/io/viewer.js, built in as a string by CMakeLists.txt)
+const char* const VIEWER_JS =
+#include "knit/io/viewer_js.inc"
+    ;
 
 }  // namespace
 
@@ -255,10 +142,23 @@ std::string viewer_html(const std::vector<StateFile>& frames, const std::vector<
     throw std::invalid_argument("viewer: samples per segment must be in [1, 64]");
   if (o.sides < 3 || o.sides > 64) throw std::invalid_argument("viewer: sides must be in [3, 64]");
   const size_t ncp = static_cast<size_t>(frames[0].num_cp());
-  const long long bytes = static_cast<long long>(frames.size() * ncp * 12 * 4 / 3);
+  long long bytes = static_cast<long long>(frames.size() * ncp * 12 * 4 / 3);
   if (bytes > o.max_bytes)
     throw std::runtime_error("viewer: " + std::to_string(frames.size()) + " frames of " +
                              std::to_string(ncp) + " control points make a page of about " +
+                             std::to_string(bytes >> 20) + " MB; show fewer frames (every Nth)");
+  // the box the camera frames: every frame's yarn and bounded objects (as render frames a
+  // state among objects); the objects are drawn within it grown by half its largest side, as
+  // render draws them (a floor is a slab that wide)
+  Eigen::AlignedBox3d box;
+  for (const StateFile& f : frames) box.extend(scene_bounds(f, o.objects));
+  Eigen::AlignedBox3d region = box;
+  region.min().array() -= 0.5 * box.sizes().maxCoeff();
+  region.max().array() += 0.5 * box.sizes().maxCoeff();
+  const nlohmann::json objects = page_objects(o.objects, times, region, bytes);
+  if (bytes > o.max_bytes)
+    throw std::runtime_error("viewer: the frames and the surfaces of " +
+                             std::to_string(o.objects.size()) + " objects make a page of about " +
                              std::to_string(bytes >> 20) + " MB; show fewer frames (every Nth)");
   const std::filesystem::path dir(o.three_dir);
   const std::string three = read_script(dir / "three.min.js");
@@ -280,8 +180,10 @@ std::string viewer_html(const std::vector<StateFile>& frames, const std::vector<
   if (frames[0].stitch.size() == static_cast<size_t>(frames[0].num_seg()))
     for (const StitchCoord& s : frames[0].stitch) rows.push_back(s.row);
   d["rows"] = rows;
-  d["positions"] =
-      base64(reinterpret_cast<const unsigned char*>(q.data()), q.size() * sizeof(float));
+  d["positions"] = base64_of(q);
+  d["box"] = {box.min().x(), box.min().y(), box.min().z(),
+              box.max().x(), box.max().y(), box.max().z()};
+  d["objects"] = objects;
 
   std::string html;
   html += "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n";
@@ -297,15 +199,21 @@ std::string viewer_html(const std::vector<StateFile>& frames, const std::vector<
       "#frame { flex: 1; min-width: 60px; }\n"
       "#time, #title { white-space: nowrap; }\n"
       "#title { font-weight: 600; }\n"
-      "</style>\n</head>\n<body>\n<canvas id=\"view\"></canvas>\n";
+      "#scale { position: absolute; right: 12px; bottom: 56px; color: #26262b; "
+      "text-align: right; pointer-events: none; }\n"
+      "#scale-bar { margin-left: auto; height: 7px; box-sizing: border-box; "
+      "border: 2px solid #26262b; border-top: none; }\n"
+      "</style>\n</head>\n<body>\n<canvas id=\"view\"></canvas>\n"
+      "<div id=\"scale\"><div id=\"scale-label\"></div><div id=\"scale-bar\"></div></div>\n";
   html += "<div id=\"bar\"><span id=\"title\">" + html_escape(o.title) +
           "</span><button id=\"play\">play</button><input id=\"frame\" type=\"range\" min=\"0\" "
           "max=\"0\" step=\"1\" value=\"0\"><span id=\"time\"></span></div>\n";
-  html += "<script type=\"application/json\" id=\"knitsim-data\">" + d.dump() + "</script>\n";
+  html += "<script type=\"application/json\" id=\"knitsim-data\">" + json_safe(d.dump()) +
+          "</script>\n";
   html += "<script>\n" + three + "\n</script>\n";
   html += "<script>\n" + orbit + "\n</script>\n";
   html += "<script>\n";
-  html += VIEWER_JS;
+  html += script_safe(VIEWER_JS);
   html += "</script>\n</body>\n</html>\n";
   return html;
 }

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <stdexcept>
 
 namespace knit {
@@ -43,6 +44,26 @@ const ParamRange& param_range(const std::string& name) {
 std::string short_number(double x) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.6g", x);
+  return buf;
+}
+
+std::string time_left_text(double from, double to, double step) {
+  char buf[32];
+  auto shortest = [&](auto&& good) {
+    for (int digits = 1; digits <= 17; ++digits) {
+      std::snprintf(buf, sizeof buf, "%.*g", digits, to - from);
+      if (good(std::strtod(buf, nullptr))) return true;
+    }
+    return false;
+  };
+  const double steps = step > 0 ? (to - from) / step : 0;
+  const double n = std::round(steps);
+  constexpr double TOLERANCE = 1e-9;  // of a step
+  if (n >= 1 && std::abs(steps - n) <= TOLERANCE &&
+      shortest([&](double d) { return std::abs(d / step - n) <= TOLERANCE; }))
+    return buf;
+  if (shortest([&](double d) { return from + d == to; })) return buf;
+  std::snprintf(buf, sizeof buf, "%.17g", to - from);
   return buf;
 }
 

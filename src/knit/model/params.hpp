@@ -148,5 +148,13 @@ void check_duration(double duration, double time_step);
 
 /// A number for messages: at most 6 significant digits ("1e+308", not 309 digits).
 std::string short_number(double x);
+/// The time left of a run at `from` that ends at `to` with steps of `step`, written for a
+/// command that goes on with it (its --max-time): short ("0.005", not
+/// "0.0050000000000004138") where that changes nothing the run does, else exact. Exact:
+/// the shortest decimal d for which from + d == to in double arithmetic. Short: when the
+/// time left is a whole number n of steps (to 1e-9 of a step), the shortest decimal that
+/// is n steps to 1e-9 of a step: the run goes on with the same n steps of `step`
+/// (runner.cpp's ends are judged to a millionth of a step).
+std::string time_left_text(double from, double to, double step);
 
 }  // namespace knit

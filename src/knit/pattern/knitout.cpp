@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <charconv>
+#include <filesystem>
+#include <fstream>
 #include <map>
 #include <sstream>
 #include <stdexcept>
@@ -13,6 +15,8 @@ namespace knit {
 
 namespace {
 
+constexpr std::string_view KNITOUT_HEADER = ";!knitout-";
+
 struct Needle {
   char bed = 'f';  ///< 'f' or 'b'
   int index = 0;
@@ -23,6 +27,7 @@ struct Stitch {
   Needle needle;
   bool purl = false;
   int line = 0;
+  std::string instruction;  ///< as written (for messages)
 };
 
 class Reader {
@@ -72,10 +77,57 @@ class Reader {
   std::string m_carrier;
 };
 
+std::string needle_name(const Needle& n) {
+  return std::string(1, n.bed) + std::to_string(n.index);
+}
+
+// A needle knitted far fewer times than most of the piece's columns (a typo such as f-3
+// for f47, a stray stitch) is named at its first stitch: the row walk would only find the
+// rows it shifts, long after it. Pieces of two columns are left to the row walk (which of
+// the two is the stray is not to be told).
+void check_stray_columns(const Reader& reader, const std::vector<Stitch>& stitches,
+                         const std::vector<Needle>& columns,
+                         const std::map<Needle, int>& column_of) {
+  if (columns.size() < 3) return;
+  std::vector<int> height(columns.size(), 0);
+  for (const Stitch& s : stitches) ++height[static_cast<size_t>(column_of.at(s.needle))];
+  // the height most columns have (a tie: the taller)
+  std::map<int, int> how_many;
+  for (int h : height) ++how_many[h];
+  int usual = 0, most = 0;
+  for (const auto& [h, n] : how_many)
+    if (n >= most) {
+      usual = h;
+      most = n;
+    }
+  for (const Stitch& s : stitches) {
+    const int h = height[static_cast<size_t>(column_of.at(s.needle))];
+    if (2 * h >= usual) continue;
+    reader.fail(s.line, s.instruction,
+                "needle " + needle_name(s.needle) + " knits " + std::to_string(h) +
+                    (h == 1 ? " stitch" : " stitches") + " in the whole program, and " +
+                    std::to_string(most) + " of the piece's " + std::to_string(columns.size()) +
+                    " columns knit " + std::to_string(usual) +
+                    ": every column is knitted in every row (a mistyped needle?); shaping and "
+                    "short rows are not supported yet");
+  }
+}
+
 }  // namespace
 
 bool is_knitout_path(const std::string& name_or_path) {
-  return name_or_path.size() > 2 && name_or_path.compare(name_or_path.size() - 2, 2, ".k") == 0;
+  if (name_or_path.size() > 2 && name_or_path.compare(name_or_path.size() - 2, 2, ".k") == 0)
+    return true;
+  // any other name: a regular file whose first line is knitout's header (a FIFO or device
+  // is not opened here; the chart reader refuses it by name)
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(name_or_path, ec)) return false;
+  std::ifstream in(name_or_path, std::ios::binary);
+  char head[16] = {};
+  in.read(head, sizeof head);
+  std::string_view text(head, static_cast<size_t>(in.gcount()));
+  if (text.substr(0, 3) == "\xEF\xBB\xBF") text.remove_prefix(3);
+  return text.substr(0, KNITOUT_HEADER.size()) == KNITOUT_HEADER;
 }
 
 KnitoutPiece parse_knitout(std::string_view text, const std::string& source_name) {
@@ -93,7 +145,7 @@ KnitoutPiece parse_knitout(std::string_view text, const std::string& source_name
     ++line_no;
     if (!line.empty() && line.back() == '\r') line.pop_back();
     if (line_no == 1) {
-      if (line.rfind(";!knitout-", 0) != 0)
+      if (line.rfind(KNITOUT_HEADER, 0) != 0)
         reader.fail(1, "", "not a knitout program: the first line must be ';!knitout-N'");
       magic = true;
       continue;
@@ -121,7 +173,7 @@ KnitoutPiece parse_knitout(std::string_view text, const std::string& source_name
         if (cast_on[n]) reader.fail(line_no, instruction, "the needle is already cast on");
         cast_on[n] = true;
       } else if (op != "miss") {
-        stitches.push_back({n, op == "purl", line_no});
+        stitches.push_back({n, op == "purl", line_no, instruction});
       }
     } else if (op == "rack") {
       double r = 0;
@@ -163,7 +215,7 @@ KnitoutPiece parse_knitout(std::string_view text, const std::string& source_name
       if (beds.size() != 2) {
         const Stitch& s = *std::find_if(stitches.begin(), stitches.end(),
                                         [&](const Stitch& t) { return t.needle.index == index; });
-        reader.fail(s.line, "",
+        reader.fail(s.line, s.instruction,
                     "a tube needs its needles on both beds, but needle " + std::to_string(index) +
                         " is used on one bed only");
       }
@@ -176,21 +228,24 @@ KnitoutPiece parse_knitout(std::string_view text, const std::string& source_name
   for (size_t c = 0; c < columns.size(); ++c) column_of[columns[c]] = static_cast<int>(c);
   const int cols = static_cast<int>(columns.size());
   const auto total = static_cast<int>(stitches.size());
-  if (total % cols != 0) {
-    const Stitch& s = stitches[static_cast<size_t>(total - total % cols)];
-    reader.fail(s.line, "",
-                "the last row has " + std::to_string(total % cols) + " of the piece's " +
-                    std::to_string(cols) +
-                    " stitches: shaping and short rows are not supported yet");
-  }
+  check_stray_columns(reader, stitches, columns, column_of);
+  // every row one whole pass over the columns, in order: the first stitch out of order
+  // is the one named
   const int rows = total / cols;
-  auto needle_name = [](const Needle& n) {
-    return std::string(1, n.bed) + std::to_string(n.index);
-  };
   piece.pattern.rows.assign(rows, std::string(cols, 'k'));
   for (int r = 0; r < rows; ++r) {
     // one pass over every column in order: left to right or back (a round: once around)
     const int first = column_of[stitches[static_cast<size_t>(r * cols)].needle];
+    // a flat row, one whole pass, starts at an edge of the piece
+    if (!piece.in_the_round && first != 0 && first != cols - 1) {
+      const Stitch& s = stitches[static_cast<size_t>(r * cols)];
+      reader.fail(s.line, s.instruction,
+                  "row " + std::to_string(r) + " starts at needle " + needle_name(s.needle) +
+                      ", not at an edge of the piece (" + needle_name(columns.front()) + " or " +
+                      needle_name(columns.back()) +
+                      "): every row must be one whole pass; shaping and short rows are not "
+                      "supported yet");
+    }
     int step = 0;
     for (int k = 0; k < cols; ++k) {
       const Stitch& s = stitches[static_cast<size_t>(r * cols + k)];
@@ -201,21 +256,25 @@ KnitoutPiece parse_knitout(std::string_view text, const std::string& source_name
             piece.in_the_round ? ((c - first + cols) % cols == 1 ? 1 : -1) : (c > first ? 1 : -1);
       const int expected =
           piece.in_the_round ? ((first + step * k) % cols + cols) % cols : first + step * k;
-      if (k > 0 && c != expected) {
-        std::string instruction =
-            std::string(s.purl ? "purl" : "knit") + " " + needle_name(s.needle);
+      if (k > 0 && c != expected)
         reader.fail(
-            s.line, instruction,
+            s.line, s.instruction,
             "row " + std::to_string(r) + " does not go over the columns in order " +
                 "(expected needle " +
                 needle_name(columns[static_cast<size_t>(std::clamp(expected, 0, cols - 1))]) +
                 "): every row must be one whole pass; shaping and short rows are not "
                 "supported yet");
-      }
       const bool back = s.needle.bed == 'b';
       const bool knit_front = piece.in_the_round ? !s.purl : (back == s.purl);
       piece.pattern.rows[r][c] = knit_front ? 'k' : 'p';
     }
+  }
+  if (total % cols != 0) {
+    const Stitch& s = stitches[static_cast<size_t>(total - total % cols)];
+    reader.fail(s.line, s.instruction,
+                "the last row has " + std::to_string(total % cols) + " of the piece's " +
+                    std::to_string(cols) +
+                    " stitches: shaping and short rows are not supported yet");
   }
   return piece;
 }

@@ -38,7 +38,8 @@ struct KnitoutPiece {
 /// the line and the instruction on anything it cannot knit.
 KnitoutPiece parse_knitout(std::string_view text, const std::string& source_name);
 
-/// Whether `name_or_path` names a knitout program (a path ending in ".k").
+/// Whether `name_or_path` names a knitout program: a path ending in ".k", or a regular
+/// file of any other name whose first line is the knitout header ";!knitout-".
 bool is_knitout_path(const std::string& name_or_path);
 
 /// Reads the knitout program at `path` (at most MAX_CHART_BYTES).

@@ -36,8 +36,9 @@ Pattern builtin_pattern(std::string_view name);
 /// Names accepted by builtin_pattern, in a fixed order.
 std::vector<std::string> builtin_pattern_names();
 
-/// A built-in pattern by name, or else a knitout program (a path ending in ".k": its
-/// stitches, knitout.hpp) or a chart file (parse_chart). Throws naming the argument when it
+/// A built-in pattern by name, or else a knitout program (a path ending in ".k", or a file
+/// whose first line is ";!knitout-": its stitches, knitout.hpp) or a chart file
+/// (parse_chart). Throws naming the argument when it
 /// is none of them.
 Pattern load_pattern(const std::string& name_or_path);
 

@@ -49,6 +49,7 @@ void copy_relaxed(const std::string& out_dir, const RunReport& report) {
     fs::remove(fs::path(out_dir) / "relaxed.kstate");
     return;
   }
+  claim_run_output((fs::path(out_dir) / "relaxed.kstate").string());
   fs::copy_file(fs::path(out_dir) / "final.kstate", fs::path(out_dir) / "relaxed.kstate",
                 fs::copy_options::overwrite_existing);
 }
@@ -268,8 +269,10 @@ RelaxResult relax_knit(const std::string& pattern_name, const RelaxKnitOptions& 
   RelaxResult result{model, setup.state, {}};
   const std::string& out = o.run.out_dir;
   check_start(sim, result.state);
+  RunDirectory held;  // locked until the relaxed state is beside the final one
+  if (!out.empty()) held = o.run.continue_in_place ? continue_run_directory(out)
+                                                   : prepare_run_directory(out, o.run.overwrite);
   if (!out.empty() && !o.run.continue_in_place) {
-    prepare_run_directory(out, o.run.overwrite);
     write_state_file((fs::path(out) / "initial.kstate").string(),
                      make_state_file(model, result.state));
   }
@@ -327,8 +330,10 @@ RelaxResult relax_yarns(const std::string& path, const RelaxYarnsOptions& o) {
   const std::string& out = o.run.out_dir;
   Simulator sim(model);
   check_start(sim, result.state);
+  RunDirectory held;
+  if (!out.empty()) held = o.run.continue_in_place ? continue_run_directory(out)
+                                                   : prepare_run_directory(out, o.run.overwrite);
   if (!out.empty() && !o.run.continue_in_place) {
-    prepare_run_directory(out, o.run.overwrite);
     write_state_file((fs::path(out) / "initial.kstate").string(),
                      make_state_file(model, result.state));
   }

@@ -228,14 +228,18 @@ StretchResult stretch_sheet(const std::string& kstate_path, const SheetStretchOp
   const KnitSheet ks = make_knit_sheet(g, so.node_spacing);
   const auto t0 = std::chrono::steady_clock::now();
   const sheet::SheetEmbedding emb = sheet::embed_points(ks.mesh, ks.embedded);
+  RunDirectory held;  // locked until its last output is written
   if (!o.out_dir.empty()) {
-    prepare_run_directory(o.out_dir, o.overwrite);
-    if (o.write_frames) fs::create_directories(fs::path(o.out_dir) / "frames");
+    held = prepare_run_directory(o.out_dir, o.overwrite);
+    if (o.write_frames) {
+      fs::create_directories(fs::path(o.out_dir) / "frames");
+      claim_run_output((fs::path(o.out_dir) / "frames").string());
+    }
   }
 
   // the samples' strains: out to the target, then back and forth for the cycles
   std::vector<double> strains = {0.0};
-  const int per_pull = std::max(1, static_cast<int>(std::lround(o.to_strain / o.output_strain)));
+  const int per_pull = std::max(1, static_cast<int>(std::lround(o.to_strain / sample_strain(o))));
   for (int c = 0; c <= o.cycles; ++c)
     for (int k = 1; k <= per_pull; ++k) {
       const double e = o.to_strain * k / per_pull;
@@ -356,20 +360,45 @@ SheetFit fit_sheet_material(const std::string& kstate_path, const std::vector<st
     int clamps = 2;
   };
   std::map<std::string, Target> targets;
+  // the fields read below, where present, of the types a stretch run writes (value()
+  // would throw the JSON library's own words at a summary.json from elsewhere)
+  auto typed = [](const nlohmann::json& s) {
+    for (const char* key : {"model", "protocol"})
+      if (s.contains(key) && !s[key].is_string()) return false;
+    for (const char* key : {"to_strain", "output_strain"})
+      if (s.contains(key) && !s[key].is_number()) return false;
+    return !s.contains("clamp_stitches") || s["clamp_stitches"].is_number_integer();
+  };
   for (const std::string& run : runs) {
     const fs::path path = fs::path(run) / "summary.json";
     std::ifstream in(path);
     if (!in) throw std::invalid_argument("--fit " + run + ": no summary.json");
     const nlohmann::json s = nlohmann::json::parse(in, nullptr, false);
     if (!s.is_object() || !s.contains("direction") || !s["direction"].is_string() ||
-        !s.contains("stretch") || !s["stretch"].is_object())
+        !s.contains("stretch") || !s["stretch"].is_object() || !typed(s))
       throw std::invalid_argument("--fit " + run + ": not a stretch run's summary");
     if (s.value("model", "yarn") == "sheet")
       throw std::invalid_argument("--fit " + run + ": a sheet run; fit to the yarn model's runs");
     const nlohmann::json& k = s["stretch"]["stiffness_small_strain"];
-    if (!k.is_number() || !(k.get<double>() > 0))
+    if (!k.is_number()) {
+      // the slope over the first tenth of a continuous pull needs 3 samples there
+      const double to = s.value("to_strain", 1.0);
+      const double step = s.value("output_strain", StretchOptions{}.output_strain);
+      const double need = 30 * step;
+      if (s.value("protocol", "continuous") == "continuous" && to < need * (1 - 1e-9))
+        throw std::invalid_argument(
+            "--fit " + run + ": the run measured no small-strain stiffness: it is the slope over " +
+            "the first tenth of the pull, which needs 3 samples (one every " + short_number(step) +
+            " strain), and this run pulled to " + short_number(to) + ": pull further (--to " +
+            short_number(need) + " or more)");
       throw std::invalid_argument("--fit " + run +
-                                  ": no positive small-strain stiffness in its summary");
+                                  ": the run measured no small-strain stiffness (did it stop "
+                                  "early? its summary's status says)");
+    }
+    if (!(k.get<double>() > 0))
+      throw std::invalid_argument("--fit " + run + ": its small-strain stiffness is " +
+                                  short_number(k.get<double>()) +
+                                  " dyn per unit strain, not positive: nothing to fit a sheet to");
     Target t;
     t.run = run;
     t.stiffness = k.get<double>();

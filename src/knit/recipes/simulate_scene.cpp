@@ -49,7 +49,10 @@ RunReport simulate_scene(Scene& scene, const SimulateOptions& o) {
   validate_params(scene.model.params);
   check_duration(scene.duration, scene.model.params.solver.time_step);
   check_start(*sim, scene.state);
-  if (!o.out_dir.empty() && !o.continue_in_place) prepare_run_directory(o.out_dir, o.overwrite);
+  RunDirectory held;
+  if (!o.out_dir.empty())
+    held = o.continue_in_place ? continue_run_directory(o.out_dir)
+                               : prepare_run_directory(o.out_dir, o.overwrite);
   if (!scene.knits.empty()) {
     nlohmann::json knits = nlohmann::json::array();
     for (const SceneKnit& k : scene.knits)

@@ -292,6 +292,7 @@ nlohmann::json render_stretch(const std::string& out_dir, const std::vector<Stre
   const bool stopped = reached < to * (1 - 1e-9);
   if (stopped) to = reached;
   fs::create_directories(dir / "renders");
+  claim_run_output((dir / "renders").string());
   std::vector<Image> panels;
   std::vector<std::string> labels;
   nlohmann::json shown = nlohmann::json::object();
@@ -314,6 +315,7 @@ nlohmann::json render_stretch(const std::string& out_dir, const std::vector<Stre
   }
   write_png(compose_side_by_side(panels, labels), (dir / "stretch_renders.png").string());
   fs::create_directories(dir / "movie");
+  claim_run_output((dir / "movie").string());
   // movie frames at a lighter sampling than the stills
   ro.spp = ro.shadow_rays = ro.ao_rays = 2;
   // at the pull's real time, each frame with its time
@@ -328,6 +330,10 @@ nlohmann::json render_stretch(const std::string& out_dir, const std::vector<Stre
 
 }  // namespace
 
+double sample_strain(const StretchOptions& o) {
+  return std::min(o.output_strain, o.to_strain);
+}
+
 void validate_stretch_options(const StretchOptions& o) {
   if (!(o.to_strain > 0) || !std::isfinite(o.to_strain) || o.to_strain > 10)
     throw std::invalid_argument("--to: expected a strain in (0, 10], got " +
@@ -340,8 +346,11 @@ void validate_stretch_options(const StretchOptions& o) {
   if (o.render && (o.render_width < 16 || o.render_height < 16 || o.render_width > 8192 ||
                    o.render_height > 8192))
     throw std::invalid_argument("render size: expected 16 to 8192 pixels each way");
-  if (!(o.output_strain > 0) || !(o.output_strain <= o.to_strain))
-    throw std::invalid_argument("output strain: expected (0, --to]");
+  // a pull shorter than the sample spacing is sampled at its end (sample_strain)
+  if (!(o.output_strain > 0) || !std::isfinite(o.output_strain) || o.output_strain > 10)
+    throw std::invalid_argument(
+        "output_strain (the strain between samples): expected (0, 10], got " +
+        short_number(o.output_strain));
   if (!std::isfinite(o.hold_strain) || o.hold_strain < 0 || o.hold_strain > o.to_strain)
     throw std::invalid_argument("--hold: expected a strain step in (0, --to], got " +
                                 short_number(o.hold_strain));
@@ -591,7 +600,7 @@ StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions&
     for (int k = 1; k <= 1 + o.cycles; ++k) keyframe(k * pull_time, k % 2 == 1 ? stroke : 0.0);
     steps = (1 + o.cycles) * pull_steps;
     output_every =
-        std::max(1LL, std::llround(o.output_strain * result.initial_separation / (o.speed * h)));
+        std::max(1LL, std::llround(sample_strain(o) * result.initial_separation / (o.speed * h)));
   } else {
     // a hold at strain 0, then per increment a move of move_steps and a hold of
     // hold_steps: every (move + hold) steps ends at rest, and is sampled
@@ -622,7 +631,10 @@ StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions&
   scene.output_every = static_cast<int>(std::min<long long>(output_every, 1'000'000'000));
   const Clamp& moving = scene.model.clamps[1];
   const std::string resumed_from = o.resume.empty() ? "" : resume_stretch(o, scene, held, result);
-  if (!o.out_dir.empty() && resumed_from.empty()) prepare_run_directory(o.out_dir, o.overwrite);
+  RunDirectory locked;  // until the last plot and render are written
+  if (!o.out_dir.empty())
+    locked = resumed_from.empty() ? prepare_run_directory(o.out_dir, o.overwrite)
+                                  : continue_run_directory(o.out_dir);
 
   const fs::path csv_path = fs::path(o.out_dir) / "stretch.csv";
   auto frame_of = [&](double time) {
@@ -699,6 +711,7 @@ StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions&
                {"cycles", o.cycles},
                {"speed_cm_s", result.speed},
                {"protocol", held ? "hold" : "continuous"},
+               {"output_strain", o.output_strain},
                {"clamp_stitches", o.clamp_stitches},
                {"max_force_dyn", o.max_force > 0 ? nlohmann::json(o.max_force) : nlohmann::json()},
                {"from", kstate_path},

@@ -37,7 +37,9 @@ struct StretchOptions {
   int cycles = 0;               ///< further half-cycles after the pull (back, out, …)
   double speed = 5.0;           ///< the moving clamp's speed (cm/s)
   int clamp_stitches = 2;       ///< columns, rows or corner size held by each clamp
-  double output_strain = 0.01;  ///< a sample (and a written state) every this much strain
+  /// a sample (and a written state) every this much strain (a pull to less is sampled at
+  /// its start and end: sample_strain)
+  double output_strain = 0.01;
   /// > 0: the held protocol. The clamp moves (at `speed`) in steps of this much
   /// strain and stands still for `hold_time` s after each (and once at strain 0 before the
   /// first), while FIRE relaxes the yarn to rest (filters/hold_relax.hpp); the curve is
@@ -112,6 +114,10 @@ struct StretchResult {
 /// Throws std::invalid_argument naming the option when a StretchOptions field is out of
 /// range.
 void validate_stretch_options(const StretchOptions& options);
+
+/// The strain between two samples of a continuous pull: output_strain, or the whole pull
+/// when it is shorter (a pull to 0.005 is sampled at 0 and 0.005).
+double sample_strain(const StretchOptions& options);
 
 /// What a user should know before trusting the curve of a pull with these options (empty
 /// when nothing): combinations that run but are known to give another curve than the

@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "knit/io/process.hpp"
+#include "knit/io/run_dir.hpp"
 
 namespace knit {
 
@@ -58,6 +59,8 @@ SequenceResult render_sequence(const std::vector<std::string>& files, RenderOpti
   if (ffmpeg.empty()) return r;
   const std::string movie = (fs::path(out_dir) / "animation.mp4").string();
   const std::string tmp = (fs::path(out_dir) / "animation.tmp.mp4").string();
+  claim_run_output(movie);
+  claim_run_output(tmp);
   std::string messages;
   const int rc = run_process({ffmpeg, "-y", "-loglevel", "error", "-framerate", std::to_string(fps),
                               "-i", (fs::path(out_dir) / "frame_%04d.png").string(), "-vf",

@@ -1,10 +1,14 @@
 #include "knit/scene/json_reader.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <fstream>
+#include <set>
 #include <sstream>
+#include <vector>
 
 #include "knit/io/input_file.hpp"
 #include "knit/model/params.hpp"
@@ -46,12 +50,6 @@ std::string describe(const nlohmann::json& v) {
       return v.dump();  // an integer: at most 20 characters
     }
   }
-}
-
-// the parser's message quotes the offending token, which may be megabytes long
-std::string shorten(const std::string& message) {
-  constexpr size_t MAX = 200;
-  return message.size() <= MAX ? message : message.substr(0, MAX) + "…";
 }
 
 }  // namespace
@@ -115,18 +113,28 @@ double JsonReader::positive(bool allow_zero) const {
 }
 
 int JsonReader::integer(int min_value) const {
-  if (!m_value.is_number_integer()) fail("expected an integer, got " + describe(m_value));
-  const auto x = m_value.get<long long>();
-  if (x < min_value || x > 1'000'000'000)
-    fail("expected an integer >= " + std::to_string(min_value) + ", got " + std::to_string(x));
-  return static_cast<int>(x);
+  return integer(min_value, 1'000'000'000);
 }
 
 int JsonReader::integer(int min_value, int max_value) const {
-  const int x = integer(min_value);
-  if (x > max_value)
-    fail("expected an integer from " + std::to_string(min_value) + " to " +
-         std::to_string(max_value) + ", got " + std::to_string(x));
+  if (!m_value.is_number_integer()) fail("expected an integer, got " + describe(m_value));
+  // an unsigned value beyond the signed range is out of range too, not wrapped negative
+  const bool huge = m_value.is_number_unsigned() &&
+                    m_value.get<std::uint64_t>() > static_cast<std::uint64_t>(max_value);
+  const long long x = huge ? 0 : m_value.get<long long>();
+  if (huge || x < min_value || x > max_value)
+    fail(max_value == 1'000'000'000
+             ? "expected an integer >= " + std::to_string(min_value) + ", got " + m_value.dump()
+             : "expected an integer from " + std::to_string(min_value) + " to " +
+                   std::to_string(max_value) + ", got " + m_value.dump());
+  return static_cast<int>(x);
+}
+
+double JsonReader::number_in(double lo, double hi, const std::string& unit) const {
+  const double x = number();
+  if (!(x >= lo && x <= hi))
+    fail("expected a value in [" + short_number(lo) + ", " + short_number(hi) + "]" +
+         (unit.empty() ? "" : " " + unit) + ", got " + short_number(x));
   return x;
 }
 
@@ -146,6 +154,15 @@ Eigen::Vector3d JsonReader::vec3() const {
   return {at(size_t(0)).number(), at(size_t(1)).number(), at(size_t(2)).number()};
 }
 
+Eigen::Vector3d JsonReader::coordinates(double limit, const std::string& unit) const {
+  const Eigen::Vector3d v = vec3();
+  for (size_t k = 0; k < 3; ++k)
+    if (!(std::abs(v[static_cast<Eigen::Index>(k)]) <= limit))
+      at(k).fail("expected a coordinate within ±" + short_number(limit) + " " + unit + ", got " +
+                 short_number(v[static_cast<Eigen::Index>(k)]));
+  return v;
+}
+
 nlohmann::json parse_json_file(const std::string& path) {
   std::string text;
   try {
@@ -156,32 +173,151 @@ nlohmann::json parse_json_file(const std::string& path) {
   return parse_json_text(text, path);
 }
 
+namespace {
+
+// line and column (1-based) of byte `offset` of `text`
+std::string line_and_column(const std::string& text, size_t offset) {
+  size_t line = 1, col = 1;
+  for (size_t k = 0; k < offset && k < text.size(); ++k) {
+    if (text[k] == '\n') {
+      ++line;
+      col = 1;
+    } else {
+      ++col;
+    }
+  }
+  return std::to_string(line) + ":" + std::to_string(col);
+}
+
+// the byte offset of the `n`-th (0-based) object key of `text`, a JSON document valid up
+// to there (a string followed by ':' outside any string is a key)
+size_t key_offset(const std::string& text, size_t n) {
+  size_t count = 0;
+  for (size_t k = 0; k < text.size(); ++k) {
+    if (text[k] != '"') continue;
+    const size_t start = k;
+    for (++k; k < text.size() && text[k] != '"'; ++k)
+      if (text[k] == '\\') ++k;
+    size_t after = k + 1;
+    while (after < text.size() && std::isspace(static_cast<unsigned char>(text[after]))) ++after;
+    if (after < text.size() && text[after] == ':' && count++ == n) return start;
+  }
+  return text.size();
+}
+
+// the parser library's message in knitsim's words: "[json.exception.parse_error.101]
+// parse error at line 1, column 5: syntax error while parsing value - invalid literal;
+// last read: 'tru'" → "invalid literal (in a value; last read: 'tru')", bytes that do
+// not print escaped, and cut short (the token quoted may be megabytes long)
+std::string parser_message(const std::string& what) {
+  std::string m = what;
+  if (m.rfind("[json.exception.", 0) == 0 && m.find("] ") != std::string::npos)
+    m.erase(0, m.find("] ") + 2);
+  if (m.rfind("parse error", 0) == 0 && m.find(": ") != std::string::npos)
+    m.erase(0, m.find(": ") + 2);
+  std::string where;
+  if (m.rfind("syntax error while parsing ", 0) == 0) {
+    const size_t dash = m.find(" - ");
+    if (dash != std::string::npos) {
+      where = m.substr(27, dash - 27);
+      m.erase(0, dash + 3);
+    }
+  }
+  std::string last;
+  if (const size_t at = m.find("; last read: "); at != std::string::npos) {
+    // the token the lexer read, from its last line on (the library quotes from where the
+    // token began, line ends as <U+000A>): "last read: 'tru'"
+    std::string token = m.substr(at + 13);
+    m.erase(at);
+    if (token.size() >= 2 && token.front() == '\'' && token.back() == '\'')
+      token = token.substr(1, token.size() - 2);
+    const std::string nl = "<U+000A>";
+    while (token.size() >= nl.size() && token.compare(token.size() - nl.size(), nl.size(), nl) == 0)
+      token.erase(token.size() - nl.size());
+    if (const size_t cut = token.rfind(nl); cut != std::string::npos)
+      token.erase(0, cut + nl.size());
+    const size_t first = token.find_first_not_of(" \t");
+    last = "last read: '" + (first == std::string::npos ? token : token.substr(first)) + "'";
+  }
+  std::string out = m;
+  if (!where.empty() || !last.empty()) {
+    out += " (";
+    if (!where.empty())
+      out += std::string("in ") +
+             (std::string("aeiou").find(where[0]) != std::string::npos ? "an " : "a ") + where;
+    if (!where.empty() && !last.empty()) out += "; ";
+    out += last;
+    out += ")";
+  }
+  return printable(out, 200);
+}
+
+}  // namespace
+
 nlohmann::json parse_json_text(const std::string& text, const std::string& path) {
   // nesting deeper than any scene needs is refused while parsing, before the document is
-  // built (deep documents exhaust the stack of anything that walks them recursively)
-  auto limit_depth = [&](int depth, nlohmann::json::parse_event_t, nlohmann::json&) {
+  // built (deep documents exhaust the stack of anything that walks them recursively); a
+  // key given twice in one object is refused where it is given the second time (the
+  // library would keep one of the two silently)
+  struct Open {
+    bool object;
+    std::set<std::string> keys;
+    std::string key;   // the member being read (objects)
+    size_t index = 0;  // the element being read (arrays)
+  };
+  std::vector<Open> open;
+  size_t keys_read = 0;
+  auto field_path = [&]() {
+    std::string p;
+    for (const Open& o : open)
+      p += o.object ? (p.empty() ? "" : ".") + printable(o.key)
+                    : "[" + std::to_string(o.index) + "]";
+    return p;
+  };
+  auto element_read = [&]() {
+    if (!open.empty() && !open.back().object) ++open.back().index;
+  };
+  auto callback = [&](int depth, nlohmann::json::parse_event_t event, nlohmann::json& parsed) {
+    using E = nlohmann::json::parse_event_t;
     if (depth > MAX_JSON_DEPTH)
       throw InputError(path + ": JSON nested more than " + std::to_string(MAX_JSON_DEPTH) +
                        " levels deep (a scene needs a few)");
+    switch (event) {
+      case E::object_start:
+        open.push_back({true, {}, {}, 0});
+        break;
+      case E::array_start:
+        open.push_back({false, {}, {}, 0});
+        break;
+      case E::key: {
+        Open& o = open.back();
+        o.key = parsed.get<std::string>();
+        if (!o.keys.insert(o.key).second)
+          throw InputError(path + ":" + line_and_column(text, key_offset(text, keys_read)) + ": " +
+                           field_path() + ": the key \"" + printable(o.key) +
+                           "\" is given twice in one object (each key may appear once)");
+        ++keys_read;
+        break;
+      }
+      case E::object_end:
+      case E::array_end:
+        open.pop_back();
+        element_read();
+        break;
+      case E::value:
+        element_read();
+        break;
+    }
     return true;
   };
   try {
-    return nlohmann::json::parse(text, limit_depth);
+    return nlohmann::json::parse(text, callback);
   } catch (const nlohmann::json::parse_error& e) {
-    // translate the byte offset into line and column
-    size_t line = 1, col = 1;
-    for (size_t k = 0; k + 1 < e.byte && k < text.size(); ++k) {
-      if (text[k] == '\n') {
-        ++line;
-        col = 1;
-      } else {
-        ++col;
-      }
-    }
-    throw InputError(path + ":" + std::to_string(line) + ":" + std::to_string(col) +
-                     ": malformed JSON: " + shorten(e.what()));
+    // the byte offset as line and column
+    throw InputError(path + ":" + line_and_column(text, e.byte > 0 ? e.byte - 1 : 0) +
+                     ": malformed JSON: " + parser_message(e.what()));
   } catch (const nlohmann::json::exception& e) {
-    throw InputError(path + ": malformed JSON: " + shorten(e.what()));
+    throw InputError(path + ": malformed JSON: " + parser_message(e.what()));
   }
 }
 

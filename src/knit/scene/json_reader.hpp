@@ -40,9 +40,14 @@ class JsonReader {
   int integer(int min_value) const;
   /// An integer in [min_value, max_value].
   int integer(int min_value, int max_value) const;
+  /// A finite number in [lo, hi]; the message names the range (in `unit`) and the value.
+  double number_in(double lo, double hi, const std::string& unit = "") const;
   bool boolean() const;
   std::string string() const;
   Eigen::Vector3d vec3() const;
+  /// A point or vector [x, y, z] whose coordinates are each within ±`limit` (cm unless
+  /// `unit` says otherwise); the message names the element and its value.
+  Eigen::Vector3d coordinates(double limit, const std::string& unit = "cm") const;
 
   double number_or(const std::string& key, double fallback) const {
     return has(key) ? at(key).number() : fallback;
@@ -55,11 +60,16 @@ class JsonReader {
   std::string m_source, m_path;
 };
 
+/// Largest coordinate (and size) a scene's yarns and objects may have, either way (cm).
+inline constexpr double MAX_SCENE_COORDINATE = 1e6;
+
 /// Deepest nesting of arrays and objects a JSON input may have.
 inline constexpr int MAX_JSON_DEPTH = 64;
 
 /// Parses a JSON file (a regular file of at most MAX_SCENE_BYTES); syntax errors name the
-/// file, line and column; nesting deeper than MAX_JSON_DEPTH is refused.
+/// file, line and column, in knitsim's words (not the parser library's); nesting deeper
+/// than MAX_JSON_DEPTH is refused, and so is a key given twice in one object (named with
+/// its field path, line and column).
 nlohmann::json parse_json_file(const std::string& path);
 /// The same for text already in memory; `path` names it in messages.
 nlohmann::json parse_json_text(const std::string& text, const std::string& path);

@@ -33,8 +33,30 @@ Eigen::Matrix3Xd line_points(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
 Eigen::Matrix3Xd read_points(const JsonReader& r, size_t min_size) {
   r.require_array(min_size);
   Eigen::Matrix3Xd p(3, r.size());
-  for (size_t k = 0; k < r.size(); ++k) p.col(k) = r.at(k).vec3();
+  for (size_t k = 0; k < r.size(); ++k) p.col(k) = r.at(k).coordinates(MAX_SCENE_COORDINATE);
   return p;
+}
+
+// a length (cm): > 0 and at most MAX_SCENE_COORDINATE
+double scene_length(const JsonReader& r) {
+  const double x = r.positive();
+  if (!(x <= MAX_SCENE_COORDINATE))
+    r.fail("expected at most " + short_number(MAX_SCENE_COORDINATE) + " cm, got " +
+           short_number(x));
+  return x;
+}
+
+// a yarn's segments each have a length: four coinciding control points make none (named
+// here with the yarn's field path, rather than later by the segment's global index)
+void check_segments(const JsonReader& y, const Eigen::Matrix3Xd& cp) {
+  for (Eigen::Index i = 0; i + 3 < cp.cols(); ++i) {
+    double spread = 0;
+    for (int a = 1; a < 4; ++a)
+      spread = std::max(spread, (cp.col(i + a) - cp.col(i)).cwiseAbs().maxCoeff());
+    if (!(spread > 0))
+      y.fail("segment " + std::to_string(i) + " has zero length: its 4 control points (" +
+             std::to_string(i) + " to " + std::to_string(i + 3) + ") coincide");
+  }
 }
 
 // yarns read from a .yarns/.bcc/.obj file, path relative to the scene file
@@ -89,17 +111,22 @@ Eigen::Matrix3Xd parse_yarn(const JsonReader& y) {
   if (y.has("line")) {
     const JsonReader l = y.at("line");
     l.allow_keys({"from", "to", "segments"});
-    const Eigen::Vector3d a = l.at("from").vec3(), b = l.at("to").vec3();
+    const Eigen::Vector3d a = l.at("from").coordinates(MAX_SCENE_COORDINATE),
+                          b = l.at("to").coordinates(MAX_SCENE_COORDINATE);
     if ((b - a).norm() <= 0) l.fail("\"from\" and \"to\" must differ");
     return line_points(a, b, l.at("segments").integer(1, MAX_YARN_SEGMENTS));
   }
   if (y.has("helix")) {
     const JsonReader h = y.at("helix");
     h.allow_keys({"center", "radius", "pitch", "turns", "segments"});
-    const Eigen::Vector3d c = h.has("center") ? h.at("center").vec3() : Eigen::Vector3d::Zero();
-    const double radius = h.at("radius").positive();
-    const double pitch = h.at("pitch").number();
+    const Eigen::Vector3d c = h.has("center") ? h.at("center").coordinates(MAX_SCENE_COORDINATE)
+                                              : Eigen::Vector3d::Zero();
+    const double radius = scene_length(h.at("radius"));
+    const double pitch =
+        h.at("pitch").number_in(-MAX_SCENE_COORDINATE, MAX_SCENE_COORDINATE, "cm per turn");
     const double turns = h.at("turns").positive();
+    if (!(turns <= 1e6))
+      h.at("turns").fail("expected at most 1e+06 turns, got " + short_number(turns));
     const int segs = h.at("segments").integer(1, MAX_YARN_SEGMENTS);
     const int n = 16 * segs + 1;
     Eigen::Matrix3Xd poly(3, n);
@@ -112,10 +139,12 @@ Eigen::Matrix3Xd parse_yarn(const JsonReader& y) {
   }
   const JsonReader c = y.at("circle");
   c.allow_keys({"center", "radius", "degrees", "segments"});
-  const Eigen::Vector3d centre = c.has("center") ? c.at("center").vec3() : Eigen::Vector3d::Zero();
-  const double radius = c.at("radius").positive();
+  const Eigen::Vector3d centre =
+      c.has("center") ? c.at("center").coordinates(MAX_SCENE_COORDINATE) : Eigen::Vector3d::Zero();
+  const double radius = scene_length(c.at("radius"));
   const double degrees = c.has("degrees") ? c.at("degrees").positive() : 330.0;
-  if (degrees > 360) c.at("degrees").fail("expected at most 360 degrees");
+  if (degrees > 360)
+    c.at("degrees").fail("expected at most 360 degrees, got " + short_number(degrees));
   const int segs = c.at("segments").integer(1, MAX_YARN_SEGMENTS);
   const int n = 16 * segs + 1;
   Eigen::Matrix3Xd poly(3, n);
@@ -154,7 +183,7 @@ YarnPoint parse_point(const JsonReader& r, const ModelBuilder& b, bool allow_at)
                          std::to_string(yarn) + " (it has " + std::to_string(local_count()) +
                          " segments)");
   const double t = r.has("t") ? r.at("t").number() : 0.0;
-  if (t < 0 || t > 1) r.at("t").fail("expected t in [0, 1]");
+  if (t < 0 || t > 1) r.at("t").fail("expected t in [0, 1], got " + short_number(t));
   return {nseg + seg, t};
 }
 
@@ -186,7 +215,8 @@ PlacedKnit parse_knit(const JsonReader& k, const std::string& scene_path) {
   if (f.stitch.empty())
     k.at("state").fail(full.string() +
                        " has no stitch coordinates: write it with `knitsim relax PATTERN`");
-  const Eigen::Vector3d t = k.has("translate") ? k.at("translate").vec3() : Eigen::Vector3d::Zero();
+  const Eigen::Vector3d t = k.has("translate") ? k.at("translate").coordinates(MAX_SCENE_COORDINATE)
+                                               : Eigen::Vector3d::Zero();
   const Eigen::Quaterniond rot =
       k.has("rotate") ? parse_rotation(k.at("rotate")) : Eigen::Quaterniond::Identity();
   PlacedKnit out;
@@ -216,15 +246,18 @@ PlacedKnit parse_knit(const JsonReader& k, const std::string& scene_path) {
 std::pair<int, int> parse_stitch_range(const JsonReader& range, bool rows,
                                        const std::vector<StitchCoord>& stitch) {
   range.require_array(2);
-  if (range.size() != 2) range.fail("expected [first, last]");
+  if (range.size() != 2)
+    range.fail("expected [first, last], got " + std::to_string(range.size()) + " elements");
   int lo = range.at(0).integer(-1000000), hi = range.at(1).integer(-1000000);
+  const std::string given = "[" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
   int extent = 0;
   for (const StitchCoord& s : stitch) extent = std::max(extent, (rows ? s.row : s.col) + 1);
   if (lo < 0) lo += extent;
   if (hi < 0) hi += extent;
   if (lo < 0 || hi >= extent || lo > hi)
     range.fail("expected " + std::string(rows ? "rows" : "columns") + " within [0, " +
-               std::to_string(extent - 1) + "] (negative counts from the end), first ≤ last");
+               std::to_string(extent - 1) + "] (negative counts from the end), first ≤ last, got " +
+               given);
   return {lo, hi};
 }
 
@@ -280,7 +313,7 @@ Eigen::Quaterniond parse_rotation(const JsonReader& r) {
   if (!(axis.norm() > 0)) r.at("axis").fail("the rotation axis must not be zero");
   const double degrees = r.at("degrees").number();
   if (!(std::abs(degrees) <= 1e6))
-    r.at("degrees").fail("expected at most 1e+06 degrees either way");
+    r.at("degrees").fail("expected at most 1e+06 degrees either way, got " + short_number(degrees));
   return Eigen::Quaterniond(Eigen::AngleAxisd(degrees * M_PI / 180, axis.normalized()));
 }
 
@@ -293,13 +326,12 @@ std::vector<Keyframe> parse_keyframes(const JsonReader& r) {
     Keyframe kf;
     kf.time = f.at("time").positive(true);
     if (!(kf.time <= MAX_DURATION))
-      f.at("time").fail("expected a time of at most " + short_number(MAX_DURATION) + " s");
-    if (k > 0 && !(kf.time > frames.back().time)) f.at("time").fail("keyframe times must increase");
-    if (f.has("translate")) {
-      kf.translation = f.at("translate").vec3();
-      if (!(kf.translation.cwiseAbs().maxCoeff() <= 1e6))
-        f.at("translate").fail("expected coordinates within ±1e+06 cm");
-    }
+      f.at("time").fail("expected a time of at most " + short_number(MAX_DURATION) + " s, got " +
+                        short_number(kf.time));
+    if (k > 0 && !(kf.time > frames.back().time))
+      f.at("time").fail("keyframe times must increase (got " + short_number(kf.time) + " s after " +
+                        short_number(frames.back().time) + " s)");
+    if (f.has("translate")) kf.translation = f.at("translate").coordinates(MAX_SCENE_COORDINATE);
     if (f.has("rotate")) kf.rotation = parse_rotation(f.at("rotate"));
     frames.push_back(kf);
   }
@@ -369,12 +401,14 @@ Params parse_params(const JsonReader& r, Params p) {
                           {"alpha_large", &p.material.alpha_large}}) {
     if (!r.has(key)) continue;
     *dst = r.at(key).positive(true);
-    if (*dst > 1) r.at(key).fail("expected a value in [0, 1]");
+    if (*dst > 1) r.at(key).fail("expected a value in [0, 1], got " + short_number(*dst));
   }
   if (r.has("quadrature_points")) {
     p.discretisation.quadrature_points = r.at("quadrature_points").integer(3);
     if (p.discretisation.quadrature_points % 2 == 0)
-      r.at("quadrature_points").fail("Simpson's rule needs an odd number of points");
+      r.at("quadrature_points")
+          .fail("Simpson's rule needs an odd number of points, got " +
+                std::to_string(p.discretisation.quadrature_points));
   }
   if (r.has("contact_points")) p.discretisation.contact_points = r.at("contact_points").integer(1);
   if (r.has("end_mass_floor"))
@@ -459,7 +493,9 @@ Scene parse_scene(const nlohmann::json& doc, const std::string& source, const Pa
         y.allow_keys({"import"});
         for (const Eigen::Matrix3Xd& cp : parse_import(y, source)) builder.add_yarn(cp);
       } else {
-        builder.add_yarn(parse_yarn(y));
+        const Eigen::Matrix3Xd cp = parse_yarn(y);
+        check_segments(y, cp);
+        builder.add_yarn(cp);
       }
       if (builder.num_segments() > MAX_SCENE_YARN_SEGMENTS)
         y.fail("the scene's yarns have " + std::to_string(builder.num_segments()) +
@@ -502,11 +538,15 @@ Scene parse_scene(const nlohmann::json& doc, const std::string& source, const Pa
       Pin pin;
       pin.at = parse_point(pr, builder, true);
       pin.origin = point_position(shape, q0, pin.at);
-      if (pr.has("velocity")) pin.velocity = pr.at("velocity").vec3();
+      if (pr.has("velocity"))
+        pin.velocity = pr.at("velocity").coordinates(MAX_SCENE_COORDINATE, "cm/s");
       if (pr.has("start")) pin.start = pr.at("start").positive(true);
       if (pr.has("stop")) {
         pin.stop = pr.at("stop").positive(true);
-        if (pin.stop < pin.start) pr.at("stop").fail("\"stop\" must not be before \"start\"");
+        if (pin.stop < pin.start)
+          pr.at("stop").fail("\"stop\" must not be before \"start\" (got " +
+                             short_number(pin.stop) + " s, before " + short_number(pin.start) +
+                             " s)");
       }
       builder.add_pin(pin);
     }

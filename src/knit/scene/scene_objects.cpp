@@ -14,25 +14,27 @@ namespace {
 constexpr const char* SHAPE_KEYS[] = {"plane",     "sphere", "box",          "capsule", "cylinder",
                                       "ellipsoid", "union",  "smooth_union", "mesh"};
 // largest coordinate or size an object may have (cm)
-constexpr double MAX_EXTENT = 1e6;
+constexpr double MAX_EXTENT = MAX_SCENE_COORDINATE;
 
 Eigen::Vector3d point(const JsonReader& r) {
-  const Eigen::Vector3d p = r.vec3();
-  if (!(p.cwiseAbs().maxCoeff() <= MAX_EXTENT))
-    r.fail("expected coordinates within ±" + short_number(MAX_EXTENT) + " cm");
-  return p;
+  return r.coordinates(MAX_EXTENT);
 }
 
 double length(const JsonReader& r) {
   const double x = r.positive();
-  if (!(x <= MAX_EXTENT)) r.fail("expected at most " + short_number(MAX_EXTENT) + " cm");
+  if (!(x <= MAX_EXTENT))
+    r.fail("expected at most " + short_number(MAX_EXTENT) + " cm, got " + short_number(x));
   return x;
 }
 
 Eigen::Vector3d lengths(const JsonReader& r) {
   const Eigen::Vector3d v = r.vec3();
-  if (!(v.minCoeff() > 0) || !(v.maxCoeff() <= MAX_EXTENT))
-    r.fail("expected three lengths in (0, " + short_number(MAX_EXTENT) + "] cm");
+  for (size_t k = 0; k < 3; ++k) {
+    const double x = v[static_cast<Eigen::Index>(k)];
+    if (!(x > 0) || !(x <= MAX_EXTENT))
+      r.at(k).fail("expected a length in (0, " + short_number(MAX_EXTENT) + "] cm, got " +
+                   short_number(x));
+  }
   return v;
 }
 

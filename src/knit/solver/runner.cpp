@@ -20,6 +20,7 @@
 #include <sstream>
 
 #include "knit/io/input_file.hpp"
+#include "knit/io/run_dir.hpp"
 #include "knit/io/state_file.hpp"
 #include "knit/solver/interrupt.hpp"
 #include "knit/solver/step_halving.hpp"
@@ -267,6 +268,7 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
       static_cast<long long>(std::ceil((end_time - state.time) / h - 1e-6));
   const bool write = !opt.out_dir.empty();
   const fs::path dir(opt.out_dir);
+  RunDirectory held;  // locked while the run writes it (a recipe may hold it already)
   if (write) {
     // the frames must fit on the disk (a long run with frequent frames can fill it)
     const double frames = opt.write_frames ? std::floor(total_steps / opt.output_every) + 2 : 2;
@@ -284,8 +286,12 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
     if (bytes > 2e9)
       std::cerr << "knitsim: warning: this run will write about " << format_bytes(bytes) << " into "
                 << opt.out_dir << "\n";
-    fs::create_directories(dir);
-    if (opt.write_frames) fs::create_directories(dir / "frames");
+    held = opt.continue_in_place ? continue_run_directory(opt.out_dir)
+                                 : prepare_run_directory(opt.out_dir, false);
+    if (opt.write_frames) {
+      fs::create_directories(dir / "frames");
+      claim_run_output((dir / "frames").string());
+    }
   }
   const StepData& data = sim.data();
 
@@ -296,8 +302,12 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
     if (opt.continue_in_place && fs::exists(dir / "log.csv")) {
       appending = truncate_log_after(dir / "log.csv", state.time, log_header(sim));
       // a log of other columns (an older knitsim) is kept whole beside the new one
-      if (!appending) fs::rename(dir / "log.csv", dir / "log_before_resume.csv");
+      if (!appending) {
+        claim_run_output((dir / "log_before_resume.csv").string());
+        fs::rename(dir / "log.csv", dir / "log_before_resume.csv");
+      }
     }
+    claim_run_output((dir / "log.csv").string());
     if (appending) {
       log.open(dir / "log.csv", std::ios::app);
     } else {
@@ -344,11 +354,8 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
   // the command that goes on from DIR/final.kstate with the time left
   auto resume_command = [&] {
     std::string cmd = opt.resume_command;
-    if (const size_t at = cmd.find("{time_left}"); at != std::string::npos) {
-      char left[32];
-      std::snprintf(left, sizeof left, "%.17g", end_time - state.time);
-      cmd.replace(at, 11, left);
-    }
+    if (const size_t at = cmd.find("{time_left}"); at != std::string::npos)
+      cmd.replace(at, 11, time_left_text(state.time, end_time, h));
     return cmd;
   };
   // what every summary says of where the run stands (the end's and a checkpoint's)
