@@ -3,10 +3,15 @@
 //
 // Arrays: State.q and State.v are numpy views of the state's own memory, shape (num_cp, 3)
 // (writing into them changes the state); everything else is a fresh array or dict.
-// Errors: the library's messages, unchanged — std::invalid_argument becomes ValueError,
-// InputError (bad scene or file contents) ValueError, other std::runtime_error
+// Errors: the library's messages with the options they name ("--rows", "max-time = …")
+// named as this module's keyword arguments (rows, max_time; docs/cli.md, "From Python"):
+// std::invalid_argument becomes ValueError, InputError (bad scene or file contents)
+// ValueError, a missing file (FileNotFound) FileNotFoundError, other std::runtime_error
 // RuntimeError; a step that fails raises knitsim.StepError (a RuntimeError) and leaves the
 // state as it was.
+// Options: every function takes the options of the command it stands for, as keyword
+// arguments with the command's defaults (the library's); None: the recipe's default, or
+// the resumed state's.
 // Long calls (relax, stretch, run, step) release the GIL; Ctrl-C ends a relax, stretch or
 // run after the current step as `knitsim relax` does (status "interrupted"), and then
 // raises KeyboardInterrupt.
@@ -16,15 +21,25 @@
 #include <pybind11/stl.h>
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <csignal>
+#include <filesystem>
+#include <map>
 #include <memory>
 #include <optional>
+#include <regex>
+#include <set>
 #include <string>
 
 #include "knit/analysis/fabric_shape.hpp"
+#include "knit/io/export.hpp"
+#include "knit/io/input_file.hpp"
+#include "knit/io/run_dir.hpp"
 #include "knit/io/state_file.hpp"
+#include "knit/io/states.hpp"
 #include "knit/pattern/knitout.hpp"
 #include "knit/recipes/relax_knit.hpp"
+#include "knit/recipes/sheet_stretch.hpp"
 #include "knit/recipes/simulate_scene.hpp"
 #include "knit/recipes/stretch.hpp"
 #include "knit/scene/json_reader.hpp"
@@ -115,6 +130,162 @@ Params params_over(const Params& base, const py::object& overrides, const char* 
   if (overrides.is_none()) return base;
   const nlohmann::json j = to_json(overrides);
   return parse_params(JsonReader(j, where, "params"), base);
+}
+
+// ---------------------------------------------------------------- errors
+
+// The keyword argument for the command-line option `flag` (without its "--").
+std::string keyword(const std::string& flag) {
+  static const std::map<std::string, std::string> renamed = {{"round", "in_the_round"},
+                                                             {"ke-threshold", "rest"},
+                                                             {"quiet", "progress"},
+                                                             {"no-frames", "frames"},
+                                                             {"no-render", "render"}};
+  const auto it = renamed.find(flag);
+  if (it != renamed.end()) return it->second;
+  std::string k = flag;
+  std::replace(k.begin(), k.end(), '-', '_');
+  return k;
+}
+
+// The options that take no value: "--bind-off" reads bind_off=True, "no --bind-off"
+// bind_off=False.
+bool is_switch(const std::string& flag) {
+  static const std::set<std::string> switches = {"round",       "bind-off",  "cast-on",
+                                                 "fire",        "overwrite", "implicit-bending",
+                                                 "hold-damped", "sheet"};
+  return switches.count(flag) > 0;
+}
+
+// `message` with the options it names as keyword arguments: "--rows" → "rows", "no
+// --round" → "in_the_round=False", a leading "max-time: " → "max_time: ".
+std::string keyword_message(const std::string& message) {
+  static const std::regex flag(R"((^|[\s(\[`"'])(no )?--([a-z][a-z0-9]*(?:-[a-z0-9]+)*))");
+  static const std::regex lead(R"(^([a-z]+(?:-[a-z]+)+)(: | = ))");
+  static const std::set<std::string> leading = {"max-time",
+                                                "ke-threshold",
+                                                "contact-reuse-widen",
+                                                "contact-reuse-widen-residual",
+                                                "check-every",
+                                                "checkpoint-every",
+                                                "time-step",
+                                                "max-step-halvings",
+                                                "end-mass-floor",
+                                                "contact-points",
+                                                "contact-solve-tolerance",
+                                                "contact-reuse",
+                                                "segments-per-stitch",
+                                                "stitch-size",
+                                                "hold-time",
+                                                "max-force",
+                                                "clamp-stitches",
+                                                "output-every",
+                                                "k-global",
+                                                "alpha-small",
+                                                "alpha-large",
+                                                "yarn-friction",
+                                                "node-spacing"};
+  std::string out;
+  auto begin = message.cbegin();
+  for (std::sregex_iterator it(message.begin(), message.end(), flag), end; it != end; ++it) {
+    const std::smatch& m = *it;
+    out.append(begin, m[0].first);
+    const std::string name = m[3], kw = keyword(name);
+    const bool no = m[2].matched;
+    out += m[1].str();
+    if (is_switch(name))
+      out += kw + (no ? "=False" : "=True");
+    else
+      out += (no ? "no " : "") + kw;
+    begin = m[0].second;
+  }
+  out.append(begin, message.cend());
+  std::smatch m;
+  if (std::regex_search(out, m, lead) && leading.count(m[1]))
+    out = keyword(m[1]) + m[2].str() + m.suffix().str();
+  return out;
+}
+
+// A path argument that names nothing: FileNotFoundError naming the keyword, before the
+// library is asked.
+void require_path(const std::string& path, const char* kw) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec))
+    throw FileNotFound(std::string(kw) + ": " + path + ": no such file or directory");
+}
+
+Integrator integrator_arg(const std::string& name) {
+  try {
+    return parse_integrator(name);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("integrator: ") + e.what());
+  }
+}
+
+// The solver options that simulate, relax and stretch share (docs/cli.md, "Solver
+// options"); each unset one leaves the parameters as they are.
+struct SolverArgs {
+  std::optional<double> time_step;
+  std::optional<std::string> integrator;
+  std::optional<bool> implicit_bending;
+  std::optional<double> contact_solve_tolerance, contact_reuse;
+  std::optional<int> max_step_halvings;
+  void apply(Params& p) const {
+    if (time_step) p.solver.time_step = *time_step;
+    if (integrator) p.solver.integrator = integrator_arg(*integrator);
+    if (implicit_bending) p.solver.implicit_bending = *implicit_bending;
+    if (contact_solve_tolerance) p.solver.contact_solve_tolerance = *contact_solve_tolerance;
+    if (contact_reuse) p.solver.contact_reuse = *contact_reuse;
+    if (max_step_halvings) p.solver.max_step_halvings = *max_step_halvings;
+  }
+};
+
+// --threads for the length of a call (0: as set_threads left it)
+std::unique_ptr<tbb::global_control> thread_limit(int threads) {
+  if (threads < 0) throw std::invalid_argument("threads: must be >= 0 (0: all cores)");
+  if (threads == 0) return nullptr;
+  return std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                               static_cast<size_t>(threads));
+}
+
+// --export FORMAT of relax and simulate: checked before the run, written after it into `out`
+// (usd: every state as frames.usda; else the final state as final.EXT)
+void check_export(const std::string& format, const std::string& out) {
+  if (format.empty()) return;
+  try {
+    export_extension(format);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("export: ") + e.what());
+  }
+  if (out.empty()) throw std::invalid_argument("export: exports the run in `out`: give one");
+}
+
+void export_outputs(const std::string& format, const std::string& out,
+                    const std::vector<std::shared_ptr<const SceneObject>>& objects = {}) {
+  namespace fs = std::filesystem;
+  if (format.empty()) return;
+  const fs::path dir(out);
+  if (format == "usd") {
+    std::vector<StateFile> frames;
+    std::vector<double> times;
+    const std::vector<std::string> paths =
+        fs::exists(dir / "frames") ? list_state_files((dir / "frames").string())
+                                   : std::vector<std::string>{(dir / "final.kstate").string()};
+    for (const std::string& path : paths) {
+      frames.push_back(read_state_file(path));
+      times.push_back(frames.back().state.time);
+    }
+    export_usd(frames, times, (dir / "frames.usda").string(), objects);
+    return;
+  }
+  ExportOptions options;
+  options.objects = objects;
+  export_state(read_state_file((dir / "final.kstate").string()), format,
+               (dir / ("final" + export_extension(format))).string(), options);
+}
+
+std::string num(double x) {
+  return short_number(x);
 }
 
 // ---------------------------------------------------------------- step data
@@ -243,8 +414,12 @@ PYBIND11_MODULE(knitsim, m) {
   py::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);
+    } catch (const FileNotFound& e) {
+      PyErr_SetString(PyExc_FileNotFoundError, keyword_message(e.what()).c_str());
     } catch (const InputError& e) {
-      PyErr_SetString(PyExc_ValueError, e.what());
+      PyErr_SetString(PyExc_ValueError, keyword_message(e.what()).c_str());
+    } catch (const std::invalid_argument& e) {
+      PyErr_SetString(PyExc_ValueError, keyword_message(e.what()).c_str());
     }
   });
 
@@ -450,20 +625,82 @@ PYBIND11_MODULE(knitsim, m) {
                ", t = " + std::to_string(k.result.state.time) + " s>";
       });
 
+  // the defaults the docstrings name: the recipes' own
+  const Params relax_defaults = relax_knit_params(), yarns_defaults = relax_yarns_params(),
+               stretch_defaults = stretch_params();
+  const RelaxKnitOptions relax_options;
+  const RelaxOptions relax_run;
+  static const std::string solver_doc =
+      "The solver's options (docs/cli.md, \"Solver options\"), as the command's: `time_step` "
+      "(s), `integrator` (\"explicit\", \"imex\" or \"imex-contact\"), `implicit_bending`, "
+      "`contact_solve_tolerance` (fraction), `contact_reuse` (yarn radii), "
+      "`max_step_halvings`; `threads` (0: as set_threads left it). Each applies over "
+      "`params`, a dict of scene parameters (docs/scene-format.md).";
+  static const std::string relax_doc =
+      "Generates `pattern` (stockinette, garter, rib2x2, seed, … a chart file or a knitout "
+      "program) at rows × cols (default " +
+      std::to_string(relax_options.knit.rows) + " × " + std::to_string(relax_options.knit.cols) +
+      ", or the program's size) and relaxes it until it rests (kinetic energy per length below "
+      "`rest` erg/cm, default " +
+      num(relax_run.ke_per_length) +
+      ", or with `residual` > 0 the force residual below `residual` cm/s²) or `max_time` s of "
+      "simulated time (`knitsim relax`; docs/cli.md). `fire`: relax by minimisation (FIRE; "
+      "rest by the force residual, " +
+      num(RELAX_FIRE_RESIDUAL) +
+      " cm/s² unless `residual` says). `bind_off`: tie the last row's loops to the row below "
+      "(a sewn bind-off); `cast_on`: tie the second row's loops to the first (a cast-on). "
+      "`stitch_size` (cm, 0: the generator's), `shrink` (default " +
+      num(relax_options.shrink) + "), `segments_per_stitch` (default " +
+      std::to_string(relax_options.knit.segments_per_stitch) +
+      "). Damping: `k_global` (g/s, default " + num(relax_defaults.material.k_global) +
+      "), `alpha_small`, `alpha_large` (the fraction of the non-rigid velocity removed per "
+      "1/11800 s, default " +
+      num(relax_defaults.material.alpha_small) + " and " +
+      num(relax_defaults.material.alpha_large) + "). " + solver_doc + " Defaults: time step " +
+      num(relax_defaults.solver.time_step) + " s, integrator " +
+      integrator_name(relax_defaults.solver.integrator) + ", " +
+      std::to_string(relax_defaults.discretisation.contact_points) +
+      " `contact_points` per segment, `end_mass_floor` " +
+      num(relax_defaults.discretisation.end_mass_floor) +
+      ". `check_every` steps between rest checks and states (default " +
+      std::to_string(relax_run.check_every) +
+      "). `resume`: go on from a knitsim.State of the same knit, or from a .kstate path, whose "
+      "knit (size, flat or round, bind-off, cast-on, stitch size, shrink) is then the default "
+      "and is checked, and whose relaxation (fire, the solver's parameters, damping, rest "
+      "test, widening; the file's knit['relaxation']) goes on as it went unless these "
+      "arguments or `params` say otherwise. `contact_reuse_widen` (with contact_reuse and the "
+      "imex-contact integrator): widen the reuse distance up to this factor (default 1: none) "
+      "while the force residual is above `contact_reuse_widen_residual` cm/s² (default " +
+      num(relax_run.contact_reuse_widen_residual) +
+      "). With `out`, writes the run as `knitsim relax --out` does (`frames`: its states along "
+      "the way; without them a checkpoint every `checkpoint_every` wall seconds, default " +
+      num(relax_run.checkpoint_every_s) +
+      "; `export`: also export the result there, as `knitsim relax --export` does). Returns a "
+      "Knit.";
   m.def(
       "relax",
       [](std::string pattern, std::optional<int> rows, std::optional<int> cols,
          std::optional<bool> in_the_round, double max_time, std::optional<double> rest,
-         double stitch_size, double shrink, int segments_per_stitch, const py::object& params,
-         const std::string& out, bool overwrite, bool progress, const py::object& resume,
-         std::optional<bool> fire, std::optional<double> residual, std::optional<bool> bind_off,
-         std::optional<bool> cast_on, std::optional<double> contact_reuse_widen,
-         std::optional<double> contact_reuse_widen_residual) {
+         std::optional<double> stitch_size, std::optional<double> shrink,
+         std::optional<int> segments_per_stitch, const py::object& params, const std::string& out,
+         bool overwrite, bool progress, const py::object& resume, std::optional<bool> fire,
+         std::optional<double> residual, std::optional<bool> bind_off, std::optional<bool> cast_on,
+         std::optional<double> contact_reuse_widen,
+         std::optional<double> contact_reuse_widen_residual, std::optional<double> time_step,
+         std::optional<std::string> integrator, std::optional<bool> implicit_bending,
+         std::optional<double> contact_solve_tolerance, std::optional<double> contact_reuse,
+         std::optional<int> max_step_halvings, std::optional<double> end_mass_floor,
+         std::optional<int> contact_points, std::optional<double> k_global,
+         std::optional<double> alpha_small, std::optional<double> alpha_large,
+         std::optional<int> check_every, std::optional<double> checkpoint_every, bool frames,
+         int threads, const std::string& export_format) {
+        check_export(export_format, out);
         RelaxKnitOptions o;
         // resume: a State, or a .kstate path whose knit block gives the defaults (as
         // `knitsim relax --resume FILE`): the knit, and how it was being relaxed
         std::optional<StateFile> resume_file;
         if (py::isinstance<py::str>(resume)) {
+          require_path(resume.cast<std::string>(), "resume");
           resume_file = read_state_file(resume.cast<std::string>());
           if (const auto& info = resume_file->knit) {
             if (info->relaxation) apply_relax_settings(*info->relaxation, o);
@@ -472,6 +709,9 @@ PYBIND11_MODULE(knitsim, m) {
             if (!in_the_round) in_the_round = info->in_the_round;
             if (!bind_off) bind_off = info->bind_off;
             if (!cast_on) cast_on = info->cast_on;
+            if (!segments_per_stitch) segments_per_stitch = info->segments_per_stitch;
+            if (!stitch_size) stitch_size = info->stitch_size_cm;
+            if (!shrink) shrink = info->shrink;
             if (pattern.empty()) pattern = info->pattern;
           }
         } else if (!resume.is_none() && !py::isinstance<State>(resume)) {
@@ -482,6 +722,7 @@ PYBIND11_MODULE(knitsim, m) {
               "relax: give a pattern (or resume from a .kstate that names its own)");
         if (is_knitout_path(pattern)) {
           // a knitting-machine program knits what it says: its size is the default
+          require_path(pattern, "pattern");
           const KnitoutPiece piece = load_knitout(pattern);
           o.knit.rows = piece.rows();
           o.knit.cols = piece.cols();
@@ -490,20 +731,30 @@ PYBIND11_MODULE(knitsim, m) {
         if (rows) o.knit.rows = *rows;
         if (cols) o.knit.cols = *cols;
         if (in_the_round) o.knit.in_the_round = *in_the_round;
-        o.knit.stitch_size_cm = stitch_size;
-        o.knit.segments_per_stitch = segments_per_stitch;
+        if (stitch_size) o.knit.stitch_size_cm = *stitch_size;
+        if (segments_per_stitch) o.knit.segments_per_stitch = *segments_per_stitch;
         o.knit.bind_off = bind_off.value_or(false);
         o.knit.cast_on = cast_on.value_or(false);
-        o.shrink = shrink;
+        if (shrink) o.shrink = *shrink;
         o.params = params_over(o.params, params, "relax");
+        const SolverArgs solver{time_step,        integrator,
+                                implicit_bending, contact_solve_tolerance,
+                                contact_reuse,    max_step_halvings};
+        solver.apply(o.params);
+        if (end_mass_floor) o.params.discretisation.end_mass_floor = *end_mass_floor;
+        if (contact_points) o.params.discretisation.contact_points = *contact_points;
+        if (k_global) o.params.material.k_global = *k_global;
+        if (alpha_small) o.params.material.alpha_small = *alpha_small;
+        if (alpha_large) o.params.material.alpha_large = *alpha_large;
         if (resume_file && resume_file->knit && resume_file->knit->relaxation) {
-          // the file's contact reuse goes with its integrator when params ask for another,
+          // the file's contact reuse goes with its integrator when another is asked for,
           // and its widening with the reuse (as `knitsim relax --resume`)
           const bool named = py::isinstance<py::dict>(params);
           auto in_params = [&](const char* key) {
             return named && params.cast<py::dict>().contains(key);
           };
-          if (in_params("integrator") && !in_params("contact_reuse") &&
+          if ((in_params("integrator") || integrator) &&
+              !(in_params("contact_reuse") || contact_reuse) &&
               o.params.solver.integrator != Integrator::IMEX_CONTACT)
             o.params.solver.contact_reuse = 0;
           if (o.params.solver.contact_reuse == 0 && !contact_reuse_widen)
@@ -515,10 +766,22 @@ PYBIND11_MODULE(knitsim, m) {
         if (contact_reuse_widen) o.run.contact_reuse_widen = *contact_reuse_widen;
         if (contact_reuse_widen_residual)
           o.run.contact_reuse_widen_residual = *contact_reuse_widen_residual;
+        if (check_every) o.run.check_every = *check_every;
+        if (checkpoint_every) o.run.checkpoint_every_s = *checkpoint_every;
         if (fire) o.fire = *fire;
+        if (o.fire) {
+          const char* damping = k_global      ? "k_global"
+                                : alpha_small ? "alpha_small"
+                                : alpha_large ? "alpha_large"
+                                              : nullptr;
+          if (damping)
+            throw std::invalid_argument(std::string(damping) +
+                                        ": a FIRE relaxation (fire=True) has no damping to set");
+        }
         o.run.out_dir = out;
         o.run.overwrite = overwrite;
         o.run.progress = progress;
+        o.run.write_frames = frames;
         State resumed;
         if (resume_file) {
           resumed = read_resumed_knit_state(resume.cast<std::string>(), pattern, o.knit);
@@ -526,33 +789,84 @@ PYBIND11_MODULE(knitsim, m) {
         } else if (!resume.is_none()) {
           o.resume = resume.cast<const State*>();
         }
+        const auto limit = thread_limit(threads);
         auto k = std::make_unique<Knit>();
         k->result = run_interruptible([&] { return relax_knit(pattern, o); });
+        export_outputs(export_format, out);
         return k;
       },
       "pattern"_a = "", "rows"_a = py::none(), "cols"_a = py::none(), "in_the_round"_a = py::none(),
-      "max_time"_a = 2.0, "rest"_a = py::none(), "stitch_size"_a = 0.0, "shrink"_a = RELAX_SHRINK,
-      "segments_per_stitch"_a = 8, "params"_a = py::none(), "out"_a = "", "overwrite"_a = false,
-      "progress"_a = false, "resume"_a = py::none(), "fire"_a = py::none(),
-      "residual"_a = py::none(), "bind_off"_a = py::none(), "cast_on"_a = py::none(),
-      "contact_reuse_widen"_a = py::none(), "contact_reuse_widen_residual"_a = py::none(),
-      "Generates `pattern` (stockinette, garter, rib2x2, seed, … a chart file or a knitout "
-      "program) at rows × cols (default 12 × 12, or the program's size) and relaxes it until it "
-      "rests (kinetic energy per length below `rest` erg/cm, default 1e-5, or with `residual` "
-      "> 0 the force residual below `residual` cm/s²) or `max_time` s of simulated time. "
-      "`fire`: relax by minimisation (FIRE; rest by the force residual, 1 cm/s² unless "
-      "`residual` says). `bind_off`: tie the last row's loops to the row below (a sewn "
-      "bind-off); `cast_on`: tie the second row's loops to the first (a cast-on). `resume`: "
-      "go on from a knitsim.State of the same knit, or from a .kstate path, whose knit (size, "
-      "flat or round, bind-off, cast-on) is then the default and is checked, and whose "
-      "relaxation (fire, the solver's parameters, damping, rest test, widening; the file's "
-      "knit['relaxation']) goes on as it went unless these arguments or `params` say "
-      "otherwise. `params`: a dict of scene parameters over the relaxation's. "
-      "`contact_reuse_widen` (with params contact_reuse and the imex-contact integrator): widen "
-      "the reuse distance up to this factor (default 1: none) while the force residual is "
-      "above `contact_reuse_widen_residual` cm/s² (default 20; `knitsim relax "
-      "--contact-reuse-widen`). With `out`, writes the run as `knitsim relax --out` does. "
-      "Returns a Knit.");
+      "max_time"_a = relax_run.max_time, "rest"_a = py::none(), "stitch_size"_a = py::none(),
+      "shrink"_a = py::none(), "segments_per_stitch"_a = py::none(), "params"_a = py::none(),
+      "out"_a = "", "overwrite"_a = false, "progress"_a = false, "resume"_a = py::none(),
+      "fire"_a = py::none(), "residual"_a = py::none(), "bind_off"_a = py::none(),
+      "cast_on"_a = py::none(), "contact_reuse_widen"_a = py::none(),
+      "contact_reuse_widen_residual"_a = py::none(), "time_step"_a = py::none(),
+      "integrator"_a = py::none(), "implicit_bending"_a = py::none(),
+      "contact_solve_tolerance"_a = py::none(), "contact_reuse"_a = py::none(),
+      "max_step_halvings"_a = py::none(), "end_mass_floor"_a = py::none(),
+      "contact_points"_a = py::none(), "k_global"_a = py::none(), "alpha_small"_a = py::none(),
+      "alpha_large"_a = py::none(), "check_every"_a = py::none(), "checkpoint_every"_a = py::none(),
+      "frames"_a = true, "threads"_a = 0, "export"_a = "", relax_doc.c_str());
+
+  static const std::string relax_yarns_doc =
+      "Relaxes the yarns of a .yarns, .bcc or .obj file (`knitsim relax --from PATH`): no "
+      "stitch coordinates, so no non-rigid damping and no shape measures. `scale` multiplies "
+      "the file's coordinates (default: its yarn radius becomes " +
+      num(ImportOptions{}.radius) + " cm); `shrink` (default " + num(RELAX_SHRINK) +
+      "), `k_global` (g/s, default " + num(yarns_defaults.material.k_global) +
+      "), rest, residual, max_time, check_every and the output arguments as relax(). " +
+      solver_doc + " Defaults: time step " + num(yarns_defaults.solver.time_step) +
+      " s (imported swatches start tightly packed), integrator " +
+      integrator_name(yarns_defaults.solver.integrator) + ". Returns a Knit.";
+  m.def(
+      "relax_yarns",
+      [](const std::string& path, std::optional<double> scale, std::optional<double> shrink,
+         double max_time, std::optional<double> rest, std::optional<double> residual,
+         std::optional<int> check_every, std::optional<double> k_global, const py::object& params,
+         std::optional<double> time_step, std::optional<std::string> integrator,
+         std::optional<bool> implicit_bending, std::optional<double> contact_solve_tolerance,
+         std::optional<double> contact_reuse, std::optional<int> max_step_halvings,
+         std::optional<double> end_mass_floor, std::optional<int> contact_points,
+         const std::string& out, bool overwrite, bool progress, bool frames,
+         std::optional<double> checkpoint_every, int threads, const std::string& export_format) {
+        require_path(path, "path");
+        check_export(export_format, out);
+        RelaxYarnsOptions o;
+        if (scale) o.import.scale = *scale;
+        if (shrink) o.shrink = *shrink;
+        o.params = params_over(o.params, params, "relax_yarns");
+        const SolverArgs solver{time_step,        integrator,
+                                implicit_bending, contact_solve_tolerance,
+                                contact_reuse,    max_step_halvings};
+        solver.apply(o.params);
+        if (end_mass_floor) o.params.discretisation.end_mass_floor = *end_mass_floor;
+        if (contact_points) o.params.discretisation.contact_points = *contact_points;
+        if (k_global) o.params.material.k_global = *k_global;
+        o.run.max_time = max_time;
+        if (rest) o.run.ke_per_length = *rest;
+        if (residual) o.run.force_residual = *residual;
+        if (check_every) o.run.check_every = *check_every;
+        if (checkpoint_every) o.run.checkpoint_every_s = *checkpoint_every;
+        o.run.out_dir = out;
+        o.run.overwrite = overwrite;
+        o.run.progress = progress;
+        o.run.write_frames = frames;
+        const auto limit = thread_limit(threads);
+        auto k = std::make_unique<Knit>();
+        k->result = run_interruptible([&] { return relax_yarns(path, o); });
+        export_outputs(export_format, out);
+        return k;
+      },
+      "path"_a, "scale"_a = py::none(), "shrink"_a = py::none(), "max_time"_a = relax_run.max_time,
+      "rest"_a = py::none(), "residual"_a = py::none(), "check_every"_a = py::none(),
+      "k_global"_a = py::none(), "params"_a = py::none(), "time_step"_a = py::none(),
+      "integrator"_a = py::none(), "implicit_bending"_a = py::none(),
+      "contact_solve_tolerance"_a = py::none(), "contact_reuse"_a = py::none(),
+      "max_step_halvings"_a = py::none(), "end_mass_floor"_a = py::none(),
+      "contact_points"_a = py::none(), "out"_a = "", "overwrite"_a = false, "progress"_a = false,
+      "frames"_a = true, "checkpoint_every"_a = py::none(), "threads"_a = 0, "export"_a = "",
+      relax_yarns_doc.c_str());
 
   // ------------------------------------------------------------- files
   py::class_<StateFile>(m, "StateFile", "A .kstate file's contents.")
@@ -565,9 +879,15 @@ PYBIND11_MODULE(knitsim, m) {
       .def_property_readonly("knit", [](const StateFile& f) { return knit_info(f.knit); })
       .def_property_readonly("num_cp", &StateFile::num_cp)
       .def_property_readonly("num_seg", &StateFile::num_seg);
-  m.def("read_state", &read_state_file, "path"_a,
-        "Reads a .kstate (positions, velocities, yarn layout, stitches, the knit's rest "
-        "lengths and glues).");
+  m.def(
+      "read_state",
+      [](const std::string& path) {
+        require_path(path, "path");
+        return read_state_file(path);
+      },
+      "path"_a,
+      "Reads a .kstate (positions, velocities, yarn layout, stitches, the knit's rest "
+      "lengths and glues).");
   m.def(
       "write_state",
       [](const std::string& path, const Model& mo, const State& s) {
@@ -590,37 +910,157 @@ PYBIND11_MODULE(knitsim, m) {
           "The scene's simulator (its terms and velocity filters), ready to step `state`.")
       .def(
           "run",
-          [](Scene& s, const std::string& out, bool overwrite, bool progress) {
+          [](Scene& s, const std::string& out, bool overwrite, bool progress,
+             const py::object& resume, std::optional<double> duration,
+             std::optional<int> output_every, std::optional<double> time_step,
+             std::optional<std::string> integrator, std::optional<bool> implicit_bending,
+             std::optional<double> contact_solve_tolerance, std::optional<double> contact_reuse,
+             std::optional<int> max_step_halvings, int threads, const std::string& export_format) {
+            check_export(export_format, out);
+            // the options override the scene's own for this run (as `knitsim simulate`'s);
+            // `state` ends as the run's last
+            Scene run = s;
+            const SolverArgs solver{time_step,        integrator,
+                                    implicit_bending, contact_solve_tolerance,
+                                    contact_reuse,    max_step_halvings};
+            solver.apply(run.model.params);
+            if (output_every) run.output_every = *output_every;
+            if (duration) {
+              try {
+                check_duration(*duration, run.model.params.solver.time_step);
+              } catch (const std::invalid_argument& e) {
+                throw std::invalid_argument(std::string("duration: ") + e.what());
+              }
+              run.duration = *duration;
+            }
             SimulateOptions o;
+            if (py::isinstance<py::str>(resume)) {
+              const std::string path = resume.cast<std::string>();
+              require_path(path, "resume");
+              const StateFile f = read_state_file(path);
+              std::vector<int> counts;
+              for (const YarnInfo& y : run.model.yarns) counts.push_back(y.num_cp());
+              if (f.yarn_cp_counts != counts)
+                throw std::invalid_argument(
+                    "resume " + path + ": it holds " + std::to_string(f.yarn_cp_counts.size()) +
+                    " yarn(s) and " + std::to_string(f.num_cp()) +
+                    " control points, but the scene has " + std::to_string(counts.size()) +
+                    " and " + std::to_string(run.model.num_cp()) +
+                    ": it is not a state of this scene");
+              if (f.state.time >= run.duration - 1e-6 * run.model.params.solver.time_step)
+                throw std::invalid_argument(
+                    "resume " + path + ": the state is at t = " + short_number(f.state.time) +
+                    " s, already at the scene's end (" + short_number(run.duration) +
+                    " s): give a longer duration to go on");
+              run.state = f.state;
+              o.continue_in_place = !out.empty() && resumes_in_place(path, out);
+              o.extra["resumed_from"] = path;
+            } else if (!resume.is_none()) {
+              throw py::type_error("Scene.run: resume is a .kstate path");
+            }
             o.out_dir = out;
             o.overwrite = overwrite;
             o.progress = progress;
             o.write_frames = !out.empty();
-            return report_dict(run_interruptible([&] { return simulate_scene(s, o); }));
+            const auto limit = thread_limit(threads);
+            py::dict report =
+                report_dict(run_interruptible([&] { return simulate_scene(run, o); }));
+            s.state = run.state;
+            export_outputs(export_format, out, run.model.objects);
+            return report;
           },
-          "out"_a = "", "overwrite"_a = false, "progress"_a = false,
+          "out"_a = "", "overwrite"_a = false, "progress"_a = false, "resume"_a = py::none(),
+          "duration"_a = py::none(), "output_every"_a = py::none(), "time_step"_a = py::none(),
+          "integrator"_a = py::none(), "implicit_bending"_a = py::none(),
+          "contact_solve_tolerance"_a = py::none(), "contact_reuse"_a = py::none(),
+          "max_step_halvings"_a = py::none(), "threads"_a = 0, "export"_a = "",
           "Runs the scene to its duration (as `knitsim simulate`); `state` ends as the last "
-          "state. Returns the report.");
+          "state. Returns the report. `resume`: go on from a .kstate of an earlier run of this "
+          "scene (into that run's `out`, the run goes on there). `duration` (s), "
+          "`output_every` (steps) and the solver's options (`time_step`, `integrator`, "
+          "`implicit_bending`, `contact_solve_tolerance`, `contact_reuse`, "
+          "`max_step_halvings`; docs/cli.md) override the scene's own for this run; "
+          "`threads` (0: as set_threads left it); `export`: also export the run in `out` "
+          "(usd: every state as frames.usda; obj, bcc, ply, …: the final state), as "
+          "`knitsim simulate --export`.");
   m.def(
       "load_scene",
       [](const std::string& path, const std::string& knit) {
-        return knit.empty() ? load_scene(path) : load_scene_with_knit(path, knit);
+        require_path(path, "path");
+        if (knit.empty()) return load_scene(path);
+        require_path(knit, "knit");
+        return load_scene_with_knit(path, knit);
       },
       "path"_a, "knit"_a = "",
       "Reads a scene file (docs/scene-format.md); `knit`: a .kstate for the scene's knit "
       "(as `knitsim simulate --knit`).");
 
   // ------------------------------------------------------------- stretch
+  const StretchOptions stretch_options;
+  const SheetStretchOptions sheet_options;
+  static const std::string stretch_doc =
+      "Stretch test of a relaxed knit (.kstate) along the course, wale or bias, as `knitsim "
+      "stretch --from`: returns the report with `curve` (strain, clamp forces in dyn, width in "
+      "cm, … as numpy arrays), the initial clamp separation (cm) and the speed as run. `to`: "
+      "nominal strain (default " +
+      num(stretch_options.to_strain) + "), `speed` (cm/s, default " + num(stretch_options.speed) +
+      "), `cycles` further half-cycles, `clamp_stitches` (default " +
+      std::to_string(stretch_options.clamp_stitches) +
+      "). `hold` > 0: pull in steps of that strain and hold the clamps still for `hold_time` s "
+      "(default " +
+      num(stretch_options.hold_time) +
+      ") after each (FIRE, or the simulation's damping with `hold_damped`); the samples with "
+      "`equilibrium` true are the holds' ends, their forces the clamps' static reactions and "
+      "`force_residual` (cm/s²) how far from rest each is. `max_force` > 0 (dyn): end the pull "
+      "at the first sample where a clamp's force exceeds it (a load limit; the summary's "
+      "stretch.stopped says where). `alpha_small`, `alpha_large` (default " +
+      num(stretch_defaults.material.alpha_small) + " and " +
+      num(stretch_defaults.material.alpha_large) + " per 1/11800 s), `yarn_friction` (default " +
+      num(stretch_defaults.material.yarn_friction) +
+      "), `end_mass_floor`, `contact_points` (default " +
+      std::to_string(stretch_defaults.discretisation.contact_points) + "). " + solver_doc +
+      " Defaults: time step " + num(stretch_defaults.solver.time_step) + " s, integrator " +
+      integrator_name(stretch_defaults.solver.integrator) +
+      ". `resume`: go on with the stopped run in `out` (same arguments) from its final.kstate, "
+      "a frame, or `out` itself (its latest state with a sample in stretch.csv). With `out`: "
+      "`frames` (the states along the way) and `render` (renders at strains 0, 0.25, 0.5, 1 "
+      "and a movie), as the command writes them. `sheet`: stretch the elastic-sheet model "
+      "instead (`knitsim stretch --sheet`), with `k_course`, `k_wale`, `k_shear` (dyn/cm, "
+      "default " +
+      num(sheet_options.material.k_stretch_u) + ", " + num(sheet_options.material.k_stretch_v) +
+      ", " + num(sheet_options.material.k_shear) + "), `k_bend` (erg, default " +
+      num(sheet_options.material.k_bend) + ") and `node_spacing` (cm, default " +
+      num(sheet_options.node_spacing) +
+      "), or those fitted to the yarn stretch runs' directories `fit`. The command's PATTERN "
+      "(relaxed first) is relax() and then stretch(); its --plot, plotting.";
   m.def(
       "stretch",
       [](const std::string& kstate, const std::string& direction, double to, double speed,
          int cycles, int clamp_stitches, double output_strain, double hold, double hold_time,
          bool hold_damped, const py::object& params, const std::string& out, bool overwrite,
-         bool render, bool progress, const std::string& resume, double max_force) {
+         bool render, bool progress, const std::string& resume, double max_force,
+         std::optional<double> time_step, std::optional<std::string> integrator,
+         std::optional<bool> implicit_bending, std::optional<double> contact_solve_tolerance,
+         std::optional<double> contact_reuse, std::optional<int> max_step_halvings,
+         std::optional<double> end_mass_floor, std::optional<int> contact_points,
+         std::optional<double> alpha_small, std::optional<double> alpha_large,
+         std::optional<double> yarn_friction, bool frames, int threads, bool sheet,
+         const std::vector<std::string>& fit, std::optional<double> k_course,
+         std::optional<double> k_wale, std::optional<double> k_shear, std::optional<double> k_bend,
+         std::optional<double> node_spacing) {
         StretchOptions o;
         o.resume = resume;
         o.max_force = max_force;
         o.params = params_over(o.params, params, "stretch");
+        const SolverArgs solver{time_step,        integrator,
+                                implicit_bending, contact_solve_tolerance,
+                                contact_reuse,    max_step_halvings};
+        solver.apply(o.params);
+        if (end_mass_floor) o.params.discretisation.end_mass_floor = *end_mass_floor;
+        if (contact_points) o.params.discretisation.contact_points = *contact_points;
+        if (alpha_small) o.params.material.alpha_small = *alpha_small;
+        if (alpha_large) o.params.material.alpha_large = *alpha_large;
+        if (yarn_friction) o.params.material.yarn_friction = *yarn_friction;
         o.hold_strain = hold;
         o.hold_time = hold_time;
         o.hold_damped = hold_damped;
@@ -634,8 +1074,56 @@ PYBIND11_MODULE(knitsim, m) {
         o.overwrite = overwrite;
         o.render = render;
         o.progress = progress;
-        o.write_frames = !out.empty();
-        const StretchResult r = run_interruptible([&] { return stretch_knit(kstate, o); });
+        o.write_frames = frames && !out.empty();
+        // the arguments first, then the files they name (as the command checks its options
+        // before it reads anything)
+        require_path(kstate, "kstate");
+        if (!resume.empty()) require_path(resume, "resume");
+        const auto limit = thread_limit(threads);
+        StretchResult r;
+        if (sheet) {
+          // as the command: the yarn model's own options have no meaning for the sheet
+          std::string yarn_only;
+          auto note = [&](bool given, const char* kw) {
+            if (given) yarn_only += (yarn_only.empty() ? "" : ", ") + std::string(kw);
+          };
+          note(hold > 0, "hold");
+          note(hold_damped, "hold_damped");
+          note(max_force > 0, "max_force");
+          note(time_step.has_value(), "time_step");
+          note(integrator.has_value(), "integrator");
+          note(implicit_bending.has_value(), "implicit_bending");
+          note(contact_solve_tolerance.has_value(), "contact_solve_tolerance");
+          note(contact_reuse.has_value(), "contact_reuse");
+          note(max_step_halvings.has_value(), "max_step_halvings");
+          note(end_mass_floor.has_value(), "end_mass_floor");
+          note(yarn_friction.has_value(), "yarn_friction");
+          note(!resume.empty(), "resume");
+          if (!yarn_only.empty())
+            throw std::invalid_argument(
+                "sheet=True: the sheet is pulled through equilibria already; " + yarn_only +
+                " are for the yarn model");
+          SheetStretchOptions so;
+          so.stretch = o;
+          if (k_course) so.material.k_stretch_u = *k_course;
+          if (k_wale) so.material.k_stretch_v = *k_wale;
+          if (k_shear) so.material.k_shear = *k_shear;
+          if (k_bend) so.material.k_bend = *k_bend;
+          if (node_spacing) so.node_spacing = *node_spacing;
+          r = run_interruptible([&] {
+            if (!fit.empty()) {
+              const SheetFit f = fit_sheet_material(kstate, fit, so);
+              so.material = f.material;
+              so.fit = f.report;
+            }
+            return stretch_sheet(kstate, so);
+          });
+        } else {
+          if (!fit.empty() || k_course || k_wale || k_shear || k_bend || node_spacing)
+            throw std::invalid_argument(
+                "fit, k_course, k_wale, k_shear, k_bend and node_spacing need sheet=True");
+          r = run_interruptible([&] { return stretch_knit(kstate, o); });
+        }
         const auto n = static_cast<py::ssize_t>(r.curve.size());
         auto column = [&](double StretchSample::*field) {
           py::array_t<double> a(n);
@@ -662,20 +1150,20 @@ PYBIND11_MODULE(knitsim, m) {
         result["axis"] = vec3(r.axis);
         return result;
       },
-      "kstate"_a, "direction"_a = "course", "to"_a = 1.0, "speed"_a = 5.0, "cycles"_a = 0,
-      "clamp_stitches"_a = 2, "output_strain"_a = 0.01, "hold"_a = 0.0, "hold_time"_a = 0.3,
-      "hold_damped"_a = false, "params"_a = py::none(), "out"_a = "", "overwrite"_a = false,
-      "render"_a = false, "progress"_a = false, "resume"_a = "", "max_force"_a = 0.0,
-      "Stretch test of a relaxed knit (.kstate) along the course, wale or bias, as `knitsim "
-      "stretch --from`: returns the report with `curve` (strain, clamp forces in dyn, width "
-      "in cm, … as numpy arrays), the initial clamp separation (cm) and the speed as run. "
-      "`hold` > 0: pull in steps of that strain and hold the clamps still for `hold_time` s "
-      "after each (FIRE, or the simulation's damping with `hold_damped`); the samples with "
-      "`equilibrium` true are the holds' ends, their forces the clamps' static reactions "
-      "and `force_residual` (cm/s²) how far from rest each is. `params`: a dict of scene "
-      "parameters over the simulation's (e.g. {\"yarn_friction\": 0.3}). `resume`: go on "
-      "with the stopped run in `out` (same arguments) from its final.kstate, a frame, or `out` "
-      "itself (its latest state with a sample in stretch.csv). `max_force` > 0 (dyn): end the "
-      "pull at the first sample where a clamp's force exceeds it (a load limit; the summary's "
-      "stretch.stopped says where).");
+      "kstate"_a, "direction"_a = stretch_direction_name(stretch_options.direction),
+      "to"_a = stretch_options.to_strain, "speed"_a = stretch_options.speed,
+      "cycles"_a = stretch_options.cycles, "clamp_stitches"_a = stretch_options.clamp_stitches,
+      "output_strain"_a = stretch_options.output_strain, "hold"_a = stretch_options.hold_strain,
+      "hold_time"_a = stretch_options.hold_time, "hold_damped"_a = stretch_options.hold_damped,
+      "params"_a = py::none(), "out"_a = "", "overwrite"_a = false,
+      "render"_a = stretch_options.render, "progress"_a = false, "resume"_a = "",
+      "max_force"_a = stretch_options.max_force, "time_step"_a = py::none(),
+      "integrator"_a = py::none(), "implicit_bending"_a = py::none(),
+      "contact_solve_tolerance"_a = py::none(), "contact_reuse"_a = py::none(),
+      "max_step_halvings"_a = py::none(), "end_mass_floor"_a = py::none(),
+      "contact_points"_a = py::none(), "alpha_small"_a = py::none(), "alpha_large"_a = py::none(),
+      "yarn_friction"_a = py::none(), "frames"_a = true, "threads"_a = 0, "sheet"_a = false,
+      "fit"_a = std::vector<std::string>{}, "k_course"_a = py::none(), "k_wale"_a = py::none(),
+      "k_shear"_a = py::none(), "k_bend"_a = py::none(), "node_spacing"_a = py::none(),
+      stretch_doc.c_str());
 }

@@ -121,26 +121,23 @@ void register_export(CLI::App& app) {
   auto args = std::make_shared<ExportArgs>();
   CLI::App* sub = app.add_subcommand(
       "export", "export a state (.kstate, or .yarns/.bcc/.obj) or a directory of states");
-  sub->add_option("input", args->input, "state file or directory of .kstate files")
-      ->required()
-      ->check(CLI::ExistingPath);
-  sub->add_option("--format,-f", args->format,
-                  "usd (exact curves, .usda), obj, bcc, ply, vtp (sampled centrelines; vtp with "
-                  "per-point radius, yarn, row, column, velocity for ParaView), obj-mesh, "
-                  "ply-mesh, glb (yarn tubes as triangles; glb in metres, Y up)")
-      ->required()
-      ->check(CLI::IsMember(knit::export_formats()));
-  sub->add_option("--out,-o", args->out, "output file (a directory for several obj/bcc/ply)")
+  add_required_path(sub, "input", args->input, "state file or directory of .kstate files")
+      ->check(existing_path());
+  add_choice(sub, "--format,-f", args->format,
+             "usd (exact curves, .usda), obj, bcc, ply, vtp (sampled centrelines; vtp with "
+             "per-point radius, yarn, row, column, velocity for ParaView), obj-mesh, ply-mesh, "
+             "glb (yarn tubes as triangles; glb in metres, Y up)",
+             knit::export_formats(), "none (required)")
       ->required();
-  sub->add_option("--samples", args->samples, "polyline samples per spline segment (obj, bcc, ply)")
-      ->check(CLI::Range(1, 1000));
+  add_out_option(sub, args->out, "output file (a directory for several obj/bcc/ply)");
+  add_integer(sub, "--samples", args->samples,
+              "polyline samples per spline segment (obj, bcc, ply, vtp)", 1, 1000,
+              "count per segment");
   sub->add_flag("--ascii", args->ascii, "ascii PLY instead of binary");
-  sub->add_option("--sides", args->sides, "tube meshes: vertices around the yarn (default 12)")
-      ->check(CLI::Range(3, 64));
-  sub->add_option("--scene", args->scene,
-                  "usd: write this scene's objects beside the yarn (default: the scene a "
-                  "simulation's summary.json beside the input names)")
-      ->check(CLI::ExistingFile);
+  add_integer(sub, "--sides", args->sides, "tube meshes: vertices around the yarn", 3, 64, "count");
+  add_path(sub, "--scene", args->scene, "usd: write this scene's objects beside the yarn",
+           "the scene a simulation's summary.json beside the input names")
+      ->check(existing_file());
   sub->add_flag("--no-objects", args->no_objects, "usd: the yarn alone");
   sub->add_flag("--y-up", args->y_up,
                 "obj, ply, bcc, vtp and meshes: turn Z up into Y up, (x, y, z) → (x, z, −y), "

@@ -19,13 +19,14 @@ void register_mesh(CLI::App& app) {
   auto o = std::make_shared<Opts>();
   CLI::App* cmd =
       app.add_subcommand("mesh", "write a scene object's surface as a triangle mesh (OBJ)");
-  cmd->add_option("scene", o->scene, "scene file (JSON)")->required()->check(CLI::ExistingFile);
-  cmd->add_option("--object", o->object, "the object's name")->required();
-  cmd->add_option("--out,-o", o->out, "output .obj file")->required();
-  cmd->add_option("--time", o->time, "where a moving object is (s)")
-      ->check(finite_range(0, knit::MAX_DURATION));
-  cmd->add_option("--voxel", o->voxel, "sampling grid (cm; default: the object's size / 160)")
-      ->check(finite_range(1e-3, 100));
+  add_required_path(cmd, "scene", o->scene, "scene file (JSON)")->check(existing_file());
+  add_text(cmd, "--object", o->object, "the object's name in the scene", "name", "none (required)")
+      ->required();
+  add_out_option(cmd, o->out, "output .obj file");
+  add_number(cmd, "--time", o->time, "where a moving object is at this time", "s",
+             closed(0, knit::MAX_DURATION));
+  add_number(cmd, "--voxel", o->voxel, "the sampling grid's spacing", "cm", closed(1e-3, 100),
+             "the object's size / 160");
   cmd->callback([o]() {
     if (std::filesystem::path(o->out).extension() != ".obj")
       throw std::invalid_argument("--out " + o->out +

@@ -3,6 +3,7 @@
 #include <iostream>
 
 #include "commands.hpp"
+#include "common.hpp"
 #include "knit/io/plot.hpp"
 
 namespace knitsim {
@@ -12,10 +13,10 @@ void register_plot(CLI::App& app) {
   auto out = std::make_shared<std::string>();
   CLI::App* sub = app.add_subcommand(
       "plot", "plot a run's DIR/log.csv into DIR/*.png, or any CSV (x column first) to a PNG");
-  sub->add_option("input", *input, "run directory holding log.csv, or a CSV file")
-      ->required()
-      ->check(CLI::ExistingPath);
-  sub->add_option("--out,-o", *out, "output PNG for a CSV file (default: beside it)");
+  add_required_path(sub, "input", *input, "run directory holding log.csv, or a CSV file")
+      ->check(existing_path());
+  add_out_option(sub, *out, "output PNG for a CSV file",
+                 "beside the CSV, its name ending .png (a run directory: DIR/*.png)");
   sub->callback([input, out] {
     std::vector<std::string> written;
     if (std::filesystem::is_directory(*input))

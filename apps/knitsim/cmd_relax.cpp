@@ -17,16 +17,20 @@ namespace knitsim {
 
 void register_relax(CLI::App& app) {
   struct Opts {
-    std::string pattern, out, from, resume, export_format, integrator = "explicit";
+    std::string pattern, out, from, resume, export_format;
     knit::RelaxKnitOptions knit;
     knit::RelaxYarnsOptions yarns;
     knit::RelaxOptions run;
+    // the material's and the solver's options start at the recipe's own values
     knit::Material material = knit::relax_knit_params().material;
     int contact_points = knit::relax_knit_params().discretisation.contact_points;
+    double end_mass_floor = knit::relax_knit_params().discretisation.end_mass_floor;
     double time_step = knit::relax_knit_params().solver.time_step;
-    double contact_reuse = 0, contact_solve_tolerance = 0, end_mass_floor = 0;
-    bool implicit_bending = false;
-    int max_step_halvings = 0;
+    std::string integrator = knit::integrator_name(knit::relax_knit_params().solver.integrator);
+    double contact_reuse = knit::relax_knit_params().solver.contact_reuse;
+    double contact_solve_tolerance = knit::relax_knit_params().solver.contact_solve_tolerance;
+    bool implicit_bending = knit::relax_knit_params().solver.implicit_bending;
+    int max_step_halvings = knit::relax_knit_params().solver.max_step_halvings;
     double shrink = knit::RELAX_SHRINK;
     int threads = 0;
     bool quiet = false, no_frames = false, overwrite = false, fire = false;
@@ -34,34 +38,35 @@ void register_relax(CLI::App& app) {
   auto o = std::make_shared<Opts>();
   CLI::App* cmd =
       app.add_subcommand("relax", "build a knit pattern's interlocked yarn and relax it to rest");
-  cmd->add_option("pattern", o->pattern,
-                  "built-in pattern (stockinette, garter, rib2x2, rib1x1, seed, "
-                  "reverse_stockinette), a chart file (k/p per stitch, last line = row 0) or a "
-                  "knitout program (.k: its size and flat/round are the program's)");
-  cmd->add_option("--from", o->from,
-                  "relax yarns imported from a .yarns, .bcc or .obj file instead of a pattern");
-  cmd->add_option("--resume", o->resume,
-                  "go on relaxing from a state written by an earlier `relax` (its relaxed.kstate "
-                  "or a frame); its pattern, size and options are the defaults — the knit's, "
-                  "and how it was being relaxed: --fire, the integrator, time step, contact "
-                  "options, damping and rest test; --max-time is then added")
-      ->check(CLI::ExistingFile);
-  cmd->add_option(
-         "--scale", o->yarns.import.scale,
-         "with --from: multiply coordinates (default: the file's yarn radius becomes 0.125 cm)")
-      ->check(finite_positive(1e6));
-  cmd->add_option("--out,-o", o->out, "output directory")->required();
-  cmd->add_flag("--overwrite", o->overwrite,
-                "replace the files of an earlier run in the output directory");
-  cmd->add_option("--rows", o->knit.knit.rows, "rows (courses), at least 2")
-      ->check(CLI::Range(2, 1'000'000));
-  cmd->add_option(
-         "--cols", o->knit.knit.cols,
-         "stitches per row, at least 2 (" + std::to_string(knit::MIN_ROUND_COLS) + " in the round)")
-      ->check(CLI::Range(2, 1'000'000));
-  cmd->add_option("--segments-per-stitch", o->knit.knit.segments_per_stitch,
-                  "spline segments per stitch")
-      ->check(CLI::Range(knit::MIN_SEGMENTS_PER_STITCH, knit::MAX_SEGMENTS_PER_STITCH));
+  const knit::Params yarns = knit::relax_yarns_params();
+  add_text(cmd, "pattern", o->pattern,
+           "built-in pattern (stockinette, garter, rib2x2, rib1x1, seed, reverse_stockinette), a "
+           "chart file (k/p per stitch, last line = row 0) or a knitout program (.k: its size "
+           "and flat/round are the program's)",
+           "name or path", "none: give a PATTERN or --from (with --resume: the state's)");
+  add_path(cmd, "--from", o->from,
+           "relax yarns imported from a .yarns, .bcc or .obj file instead of a pattern",
+           "none (a PATTERN)");
+  add_path(cmd, "--resume", o->resume,
+           "go on relaxing from a state written by an earlier `relax` (its relaxed.kstate or a "
+           "frame); its pattern, size and options are the defaults: the knit's, and how it was "
+           "being relaxed (--fire, the integrator, time step, contact options, damping and rest "
+           "test); --max-time is then added",
+           "none (from the generated knit)")
+      ->check(existing_file());
+  add_number(cmd, "--scale", o->yarns.import.scale, "with --from: multiply the file's coordinates",
+             "factor", positive(1e6),
+             "automatic: the file's yarn radius becomes " +
+                 knit::short_number(o->yarns.import.radius) + " cm");
+  add_out_option(cmd, o->out, "output directory");
+  add_overwrite_flag(cmd, o->overwrite);
+  add_size_options(
+      cmd, o->knit.knit.rows, o->knit.knit.cols, "rows (courses)",
+      "stitches per row (at least " + std::to_string(knit::MIN_ROUND_COLS) + " in the round)",
+      " (a knitout program: its own)");
+  add_integer(cmd, "--segments-per-stitch", o->knit.knit.segments_per_stitch,
+              "spline segments per stitch", knit::MIN_SEGMENTS_PER_STITCH,
+              knit::MAX_SEGMENTS_PER_STITCH, "count");
   cmd->add_flag("--round", o->knit.knit.in_the_round, "knit in the round (a tube)");
   cmd->add_flag("--bind-off", o->knit.knit.bind_off,
                 "bind off the last row: tie each of its loops to the loop below where they cross, "
@@ -69,74 +74,63 @@ void register_relax(CLI::App& app) {
   cmd->add_flag("--cast-on", o->knit.knit.cast_on,
                 "cast on the first row: tie each loop of the second row where its legs cross the "
                 "first row's loop, so that a pull cannot draw the first row's yarn out");
-  cmd->add_option("--stitch-size", o->knit.knit.stitch_size_cm,
-                  "yarn length per stitch before shrinking (cm; 0 = default for the yarn; "
-                  "working range " +
-                      knit::short_number(knit::MIN_STITCH_SIZE_RADII) + "–" +
-                      knit::short_number(knit::MAX_STITCH_SIZE_RADII) + " yarn radii)")
-      ->check(finite_range(0, 1e3));
-  cmd->add_option("--contact-points", o->contact_points, "contact quadrature points per segment")
-      ->check(CLI::Range(1, 64));
-  cmd->add_option("--shrink", o->shrink, "rest-length shrink factor c")
-      ->check(finite_range(knit::MIN_SHRINK, knit::MAX_SHRINK));
-  cmd->add_option("--k-global", o->material.k_global,
-                  "global damping k_global (g/s; default 0.15 for patterns, 1.5 with --from)")
-      ->check(finite_range(0, 1e6));
-  cmd->add_option("--alpha-small", o->material.alpha_small,
-                  "non-rigid damping of the small regions per 1/11800 s (default 0.3; the same per "
-                  "second at any --time-step)")
-      ->check(finite_range(0, 1));
-  cmd->add_option("--alpha-large", o->material.alpha_large,
-                  "non-rigid damping of the large regions per 1/11800 s (default 0.3)")
-      ->check(finite_range(0, 1));
-  cmd->add_option(
-         "--time-step", o->time_step,
-         "s (default 1/11800; 1/25000 with --from: imported swatches start tightly packed)")
-      ->check(param_check("time_step"));
+  add_number(cmd, "--stitch-size", o->knit.knit.stitch_size_cm,
+             "yarn length per stitch before shrinking (working range " +
+                 knit::short_number(knit::MIN_STITCH_SIZE_RADII) + "–" +
+                 knit::short_number(knit::MAX_STITCH_SIZE_RADII) + " yarn radii)",
+             "cm", closed(0, 1e3), "0 (the generator's own for the yarn radius)");
+  add_number(cmd, "--shrink", o->shrink, "rest-length shrink factor c (docs/model.md §6)", "factor",
+             closed(knit::MIN_SHRINK, knit::MAX_SHRINK));
+  add_number(cmd, "--k-global", o->material.k_global, "global (mass-proportional) damping", "g/s",
+             param("k_global"),
+             number_text(o->material.k_global) + " (" + number_text(yarns.material.k_global) +
+                 " with --from)");
+  add_damping_options(cmd, o->material);
+  add_time_step_option(cmd, o->time_step,
+                       number_text(o->time_step) + ", " + number_text(yarns.solver.time_step) +
+                           " with --from (imported swatches start tightly packed)");
   add_integrator_option(cmd, o->integrator);
-  add_implicit_bending_option(cmd, o->implicit_bending);
-  add_end_mass_floor_option(cmd, o->end_mass_floor);
-  add_max_step_halvings_option(cmd, o->max_step_halvings);
-  add_contact_solve_tolerance_option(
-      cmd, o->contact_solve_tolerance,
-      "; in a relaxation it iterates far more (a 12×12 rib's FIRE step at 2e-3 s took 10× the "
-      "time of one solve)");
+  add_implicit_bending_option(cmd, o->implicit_bending, true);
+  add_contact_solve_tolerance_option(cmd, o->contact_solve_tolerance);
   add_contact_reuse_option(cmd, o->contact_reuse);
-  cmd->add_option("--contact-reuse-widen", o->run.contact_reuse_widen,
-                  "with --contact-reuse: widen its distance up to this factor while the knit is "
-                  "far from rest, by the last check's force residual over "
-                  "--contact-reuse-widen-residual (default 1: no widening; 2 took 42×32 FIRE "
-                  "relaxations to rest in 6–16 % less time, 3 and more took some longer)")
-      ->check(finite_range(1, 100));
-  cmd->add_option("--contact-reuse-widen-residual", o->run.contact_reuse_widen_residual,
-                  "the force residual (cm/s²) above which --contact-reuse-widen widens: the "
-                  "reuse distance is ρ r · clamp(R / this, 1, widen)")
-      ->check(finite_positive(1e12));
-  cmd->add_option("--max-time", o->run.max_time,
-                  "simulated seconds at most (with --resume: seconds more)")
-      ->check(finite_positive(knit::MAX_DURATION));
-  cmd->add_option("--ke-threshold", o->run.ke_per_length,
-                  "rest when kinetic energy per yarn length falls below (erg/cm)")
-      ->check(finite_positive(1e12));
-  cmd->add_option("--residual", o->run.force_residual,
-                  "rest when the net force per unit mass of a step falls below (cm/s²; g = 981): "
-                  "the force-residual test instead of --ke-threshold (default with --fire: " +
-                      knit::short_number(knit::RELAX_FIRE_RESIDUAL) + ")")
-      ->check(finite_positive(1e12));
+  add_max_step_halvings_option(cmd, o->max_step_halvings);
+  add_end_mass_floor_option(cmd, o->end_mass_floor);
+  add_contact_points_option(cmd, o->contact_points);
+  add_number(cmd, "--contact-reuse-widen", o->run.contact_reuse_widen,
+             "with --contact-reuse: widen its distance up to this factor while the knit is far "
+             "from rest, by the last check's force residual over --contact-reuse-widen-residual "
+             "(2 took 42×32 FIRE relaxations to rest in 6–16 % less time)",
+             "factor", closed(1, 100), number_text(o->run.contact_reuse_widen) + " (no widening)");
+  add_number(cmd, "--contact-reuse-widen-residual", o->run.contact_reuse_widen_residual,
+             "the force residual above which --contact-reuse-widen widens: the reuse distance "
+             "is ρ r · clamp(R / this, 1, widen)",
+             "cm/s²", positive(1e12));
+  add_number(cmd, "--max-time", o->run.max_time,
+             "simulated time at most (with --resume: this much more)", "s",
+             positive(knit::MAX_DURATION));
+  add_number(cmd, "--ke-threshold", o->run.ke_per_length,
+             "rest when the kinetic energy per yarn length falls below this", "erg/cm",
+             positive(1e12));
+  add_number(
+      cmd, "--residual", o->run.force_residual,
+      "rest when the net force per unit mass falls below this (g = 981 cm/s²): the "
+      "force-residual test instead of --ke-threshold",
+      "cm/s²", positive(1e12),
+      "none: the --ke-threshold test (" + number_text(knit::RELAX_FIRE_RESIDUAL) + " with --fire)");
   cmd->add_flag("--fire,!--no-fire", o->fire,
                 "relax by minimisation (FIRE) instead of damped dynamics: no global or non-rigid "
                 "damping, the motion steered downhill; rest by the force residual (--no-fire: "
                 "damped dynamics, where a resumed state was relaxed with --fire)");
-  cmd->add_option("--check-every", o->run.check_every, "steps between rest checks and states")
-      ->check(CLI::Range(1, 1'000'000'000));
+  add_integer(cmd, "--check-every", o->run.check_every, "steps between rest checks and states", 1,
+              1'000'000'000, "steps");
   add_threads_option(cmd, o->threads);
   cmd->add_flag("--no-frames", o->no_frames, "write only the initial and relaxed states");
-  cmd->add_option("--checkpoint-every", o->run.checkpoint_every_s,
-                  "with --no-frames: wall seconds between checkpoints, the state written to "
-                  "DIR/final.kstate and the summary's resume_command, so that a run killed "
-                  "outright goes on from there (default 600; 0: none)")
-      ->check(CLI::Range(0.0, 1e9));
-  cmd->add_flag("--quiet,-q", o->quiet, "no progress line");
+  add_number(cmd, "--checkpoint-every", o->run.checkpoint_every_s,
+             "with --no-frames: wall-clock seconds between checkpoints (the state written to "
+             "DIR/final.kstate and the summary's resume_command, so that a run killed outright "
+             "goes on from there); 0: none",
+             "s (wall clock)", closed(0, 1e9));
+  add_quiet_flag(cmd, o->quiet);
   add_export_option(cmd, o->export_format);
   cmd->callback([o, cmd]() {
     auto given = [&](const char* name) { return cmd->count(name) > 0; };

@@ -23,11 +23,16 @@ namespace fs = std::filesystem;
 namespace {
 
 struct RenderArgs {
-  std::string input, out, size = "1024x768", view = "front", labels, scene;
+  // the renderer's own defaults
+  std::string input, out,
+      size = std::to_string(knit::RenderOptions{}.width) + "x" +
+             std::to_string(knit::RenderOptions{}.height),
+      view = "front", labels, scene;
   bool no_objects = false;
   std::vector<std::string> compare;
   bool color_rows = false, overwrite = false;
-  int spp = 4, shadow_rays = 4, ao_rays = 4;
+  int spp = knit::RenderOptions{}.spp, shadow_rays = knit::RenderOptions{}.shadow_rays,
+      ao_rays = knit::RenderOptions{}.ao_rays;
   double fps = 0;  // real time
   bool no_scale_bar = false;
   std::vector<double> box;  // x0,y0,z0,x1,y1,z1 (cm): a close-up; empty: the whole knit
@@ -191,48 +196,53 @@ void register_render(CLI::App& app) {
   auto a = std::make_shared<RenderArgs>();
   CLI::App* sub = app.add_subcommand(
       "render", "ray-trace a state (or .yarns/.bcc/.obj), a directory of states, or a comparison");
-  sub->add_option("input", a->input, "state file or directory of .kstate files")
-      ->check(CLI::ExistingPath);
-  sub->add_option("--out,-o", a->out, "output PNG (a directory for a sequence)")->required();
-  sub->add_option("--size", a->size, "image size WxH")->capture_default_str();
-  sub->add_option("--view", a->view,
-                  "front, back, side, iso (relative to the knit's thinnest axis) or scene (+z up, "
-                  "for knits among objects)")
-      ->check(CLI::IsMember({"front", "back", "side", "iso", "scene"}))
-      ->capture_default_str();
+  add_path(sub, "input", a->input, "state file or directory of .kstate files",
+           "none: give a state, a directory or --compare")
+      ->check(existing_path());
+  add_out_option(sub, a->out, "output PNG (a directory for a sequence)");
+  add_text(sub, "--size", a->size, "image size, width x height", "pixels (WxH)", a->size,
+           "1 to 16384 each way");
+  add_choice(sub, "--view", a->view,
+             "front, back, side, iso (relative to the knit's thinnest axis) or scene (+z up, for "
+             "knits among objects)",
+             {"front", "back", "side", "iso", "scene"});
   sub->add_flag("--color-rows", a->color_rows, "alternate colours by stitch row");
-  sub->add_flag("--overwrite", a->overwrite,
-                "for a sequence: replace the frames of an earlier render in the --out directory");
-  sub->add_option("--spp", a->spp, "samples per pixel")
-      ->check(CLI::Range(1, 1024))
-      ->capture_default_str();
-  sub->add_option("--shadow-rays", a->shadow_rays, "soft-shadow rays per sample")
-      ->check(CLI::Range(0, 256))
-      ->capture_default_str();
-  sub->add_option("--ao-rays", a->ao_rays, "ambient-occlusion rays per sample")
-      ->check(CLI::Range(0, 256))
-      ->capture_default_str();
-  sub->add_option("--compare", a->compare, "states to place side by side")
+  add_overwrite_flag(
+      sub, a->overwrite,
+      "for a sequence: replace the frames of an earlier render in the --out directory");
+  add_integer(sub, "--spp", a->spp, "samples per pixel", 1, 1024, "count per pixel");
+  add_integer(sub, "--shadow-rays", a->shadow_rays, "soft-shadow rays per sample", 0, 256,
+              "count per sample");
+  add_integer(sub, "--ao-rays", a->ao_rays, "ambient-occlusion rays per sample", 0, 256,
+              "count per sample");
+  sub->add_option("--compare", a->compare)
       ->expected(2, 64)
-      ->check(CLI::ExistingFile);
-  sub->add_option("--labels", a->labels, "comma-separated labels for --compare");
-  sub->add_option("--scene", a->scene,
-                  "draw this scene's objects under the yarn (default: the scene a simulation's "
-                  "summary.json beside the input names)")
-      ->check(CLI::ExistingFile);
+      ->check(existing_file())
+      ->type_name("PATH")
+      ->description("states to place side by side\n" +
+                    value_line("paths (2 to 64)", "none (one state or directory)"));
+  add_text(sub, "--labels", a->labels, "comma-separated labels for --compare", "text",
+           "the states' file names");
+  add_path(sub, "--scene", a->scene, "draw this scene's objects under the yarn",
+           "the scene a simulation's summary.json beside the input names")
+      ->check(existing_file());
   sub->add_flag("--no-objects", a->no_objects, "draw the yarn alone");
   sub->add_flag("--no-scale-bar", a->no_scale_bar, "no scale bar (cm) in the corner");
-  sub->add_option("--box", a->box,
-                  "X0,Y0,Z0,X1,Y1,Z1: frame this box (cm, world axes) instead of the whole knit "
-                  "and its objects, for a close-up (yarn outside it may be cut by the image's "
-                  "edge); a sequence keeps it for every frame")
+  sub->add_option("--box", a->box)
       ->expected(6)
-      ->delimiter(',');
-  sub->add_option("--fps", a->fps,
-                  "frame rate of the movie made from a sequence (default: the simulation's "
-                  "real time, at most 60 frames per second)")
-      ->check(CLI::Range(1.0, 240.0))
-      ->capture_default_str();
+      ->delimiter(',')
+      ->type_name("FLOAT")
+      ->check(number_in(closed(-1e6, 1e6)))
+      ->description(
+          "X0,Y0,Z0,X1,Y1,Z1: frame this box (world axes) instead of the whole knit and its "
+          "objects, for a close-up (yarn outside it may be cut by the image's edge); a "
+          "sequence keeps it for every frame\n" +
+          value_line("cm", "none (the whole knit and its objects)",
+                     range_text(closed(-1e6, 1e6)) + " each"));
+  add_number(sub, "--fps", a->fps, "frame rate of the movie made from a sequence",
+             "frames per second", closed(1, 240),
+             "the simulation's real time, at most " + number_text(knit::MAX_MOVIE_FPS) +
+                 " frames per second");
   sub->callback([a] { run_render(*a); });
 }
 

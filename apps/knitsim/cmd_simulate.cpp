@@ -23,34 +23,37 @@ void register_simulate(CLI::App& app) {
   };
   auto opts = std::make_shared<Opts>();
   CLI::App* cmd = app.add_subcommand("simulate", "run a scene file (JSON) and write its states");
-  cmd->add_option("scene", opts->scene, "scene file (JSON)")->required();
-  cmd->add_option("--out,-o", opts->out, "output directory")->required();
-  cmd->add_flag("--overwrite", opts->overwrite,
-                "replace the files of an earlier run in the output directory");
-  cmd->add_option("--resume", opts->resume,
-                  "go on from a state of an earlier run of this scene (its final.kstate or a "
-                  "frame) to the scene's end; into that run's directory, the run goes on there")
-      ->check(CLI::ExistingFile);
-  cmd->add_option("--knit", opts->knit,
-                  "place this relaxed knit (.kstate from `knitsim relax`) where the scene's one "
-                  "knit is, instead of the state the scene names")
-      ->check(CLI::ExistingFile);
+  add_required_path(cmd, "scene", opts->scene, "scene file (JSON, docs/scene-format.md)");
+  add_out_option(cmd, opts->out, "output directory");
+  add_overwrite_flag(cmd, opts->overwrite);
+  add_path(cmd, "--resume", opts->resume,
+           "go on from a state of an earlier run of this scene (its final.kstate or a frame) "
+           "to the scene's end; into that run's directory, the run goes on there",
+           "none (from the scene's start)")
+      ->check(existing_file());
+  add_path(cmd, "--knit", opts->knit,
+           "place this relaxed knit (.kstate from `knitsim relax`) where the scene's one knit "
+           "is, instead of the state the scene names",
+           "none (the scene's own)")
+      ->check(existing_file());
   add_threads_option(cmd, opts->threads);
-  cmd->add_option("--duration", opts->duration, "override the scene's duration (s)")
-      ->check(finite_positive(knit::MAX_DURATION));
-  cmd->add_option("--time-step", opts->time_step, "override the scene's time step (s)")
-      ->check(param_check("time_step"));
-  add_integrator_option(cmd, opts->integrator);
+  add_number(cmd, "--duration", opts->duration, "override the scene's duration", "s",
+             positive(knit::MAX_DURATION), "the scene's");
+  // a scene that sets no parameter has the library's simulation defaults
+  const knit::SolverSettings solver = knit::Params::simulation().solver;
+  add_time_step_option(cmd, opts->time_step,
+                       "the scene's (" + number_text(solver.time_step) + " unless it says)");
+  add_integrator_option(
+      cmd, opts->integrator,
+      "the scene's (" + std::string(knit::integrator_name(solver.integrator)) + " unless it says)");
   add_implicit_bending_option(cmd, opts->implicit_bending);
-  add_contact_solve_tolerance_option(cmd, opts->contact_solve_tolerance,
-                                     "; a simulation step then takes about twice the wall time; "
-                                     "overrides the scene's contact_solve_tolerance");
-  add_contact_reuse_option(cmd, opts->contact_reuse);
-  add_max_step_halvings_option(cmd, opts->max_step_halvings);
-  cmd->add_option("--output-every", opts->output_every,
-                  "override the scene's steps between written states and log rows")
-      ->check(CLI::Range(1, 1'000'000'000));
-  cmd->add_flag("--quiet,-q", opts->quiet, "no progress line");
+  add_contact_solve_tolerance_option(cmd, opts->contact_solve_tolerance, "the scene's");
+  add_contact_reuse_option(cmd, opts->contact_reuse, "the scene's");
+  add_max_step_halvings_option(cmd, opts->max_step_halvings, "the scene's");
+  add_integer(cmd, "--output-every", opts->output_every,
+              "override the scene's steps between written states and log rows", 1, 1'000'000'000,
+              "steps", "the scene's");
+  add_quiet_flag(cmd, opts->quiet);
   add_export_option(cmd, opts->export_format);
   cmd->callback([opts, cmd]() {
     // everything is validated before anything is written

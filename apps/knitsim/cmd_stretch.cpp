@@ -24,106 +24,120 @@
 
 namespace knitsim {
 
+namespace {
+// seconds of relaxation before a PATTERN is pulled (this command's own default)
+constexpr double STRETCH_RELAX_TIME = 1.0;
+}  // namespace
+
 void register_stretch(CLI::App& app) {
   struct Opts {
-    std::vector<std::string> inputs;
-    std::string from, out, plot, direction = "course", integrator, resume;
-    double time_step = 0;
     knit::StretchOptions stretch;
     knit::SheetStretchOptions sheet;
-    bool use_sheet = false, implicit_bending = false;
-    std::vector<std::string> fit;
     knit::RelaxKnitOptions relax;
-    double relax_time = 1.0;
-    int contact_points = knit::stretch_params().discretisation.contact_points;
+    std::vector<std::string> inputs;
+    std::string from, out, plot, resume;
+    // the pull's and the solver's options start at the recipe's own values
+    std::string direction = knit::stretch_direction_name(stretch.direction);
+    std::string integrator = knit::integrator_name(stretch.params.solver.integrator);
+    bool use_sheet = false;
+    std::vector<std::string> fit;
+    double relax_time = STRETCH_RELAX_TIME;
     int threads = 0;
     bool quiet = false, no_frames = false, no_render = false, overwrite = false;
   };
   auto o = std::make_shared<Opts>();
   CLI::App* cmd = app.add_subcommand(
       "stretch", "pull a relaxed knit between two clamps and record its force–strain curve");
-  cmd->add_option("inputs", o->inputs,
-                  "a PATTERN to knit, relax and stretch (built-in or chart file); or, with "
-                  "--plot, stretch runs' directories to draw together");
-  cmd->add_option("--from", o->from, "stretch this relaxed knit (.kstate from `knitsim relax`)")
-      ->check(CLI::ExistingFile);
-  cmd->add_option("--out,-o", o->out, "output directory");
-  cmd->add_flag("--overwrite", o->overwrite,
-                "replace the files of an earlier run in the output directory");
-  cmd->add_option("--resume", o->resume,
-                  "go on with the stopped run in --out: from its final.kstate, one of its frames, "
-                  "or the directory itself (its latest state with a sample in stretch.csv); "
-                  "the same command otherwise");
-  cmd->add_option("--plot", o->plot, "draw the force–strain curves of the given run directories");
-  cmd->add_option("--direction,-d", o->direction, "course, wale or bias");
-  cmd->add_option("--to", o->stretch.to_strain, "nominal strain to pull to (1 = doubled length)");
-  cmd->add_option("--cycles", o->stretch.cycles, "further half-cycles: back, out, …");
-  cmd->add_option("--speed", o->stretch.speed, "speed of the moving clamp (cm/s)");
-  cmd->add_option("--hold", o->stretch.hold_strain,
-                  "pull in steps of this much strain, holding the clamps still after each "
-                  "(and at strain 0 first) while FIRE relaxes the yarn toward rest; the curve "
-                  "is the clamps' static reactions at the ends of the holds");
-  cmd->add_option("--hold-time", o->stretch.hold_time,
-                  "with --hold: seconds of simulated time each hold lasts (default 0.3)");
+  cmd->add_option("inputs", o->inputs)
+      ->type_name("PATH")
+      ->description(
+          "a PATTERN to knit, relax and stretch (built-in or chart file); or, with "
+          "--plot, stretch runs' directories to draw together\n" +
+          value_line("name or paths", "none: give a PATTERN or --from"));
+  add_path(cmd, "--from", o->from, "stretch this relaxed knit (.kstate from `knitsim relax`)",
+           "none (a PATTERN, relaxed first)")
+      ->check(existing_file());
+  add_out_option(cmd, o->out, "output directory", "none (required, except with --plot)");
+  add_overwrite_flag(cmd, o->overwrite);
+  add_path(cmd, "--resume", o->resume,
+           "go on with the stopped run in --out: from its final.kstate, one of its frames, or "
+           "the directory itself (its latest state with a sample in stretch.csv); the same "
+           "command otherwise",
+           "none (a new run)");
+  add_path(cmd, "--plot", o->plot, "draw the force–strain curves of the given run directories",
+           "none (run a pull)", "path (PNG)");
+  add_choice(cmd, "--direction,-d", o->direction, "the pull's direction in the fabric",
+             {"course", "wale", "bias"});
+  add_number(cmd, "--to", o->stretch.to_strain, "nominal strain to pull to (1 = doubled length)",
+             "strain", positive(10));
+  add_integer(cmd, "--cycles", o->stretch.cycles, "further half-cycles: back, out, …", 0, 100,
+              "count");
+  add_number(cmd, "--speed", o->stretch.speed, "speed of the moving clamp", "cm/s", positive(1000));
+  add_number(cmd, "--hold", o->stretch.hold_strain,
+             "pull in steps of this much strain, holding the clamps still after each (and at "
+             "strain 0 first) while FIRE relaxes the yarn toward rest; the curve is the clamps' "
+             "static reactions at the ends of the holds",
+             "strain", closed(0, 10), number_text(o->stretch.hold_strain) + " (a continuous pull)");
+  add_number(cmd, "--hold-time", o->stretch.hold_time,
+             "with --hold: simulated time each hold lasts", "s", positive(100));
   cmd->add_flag("--hold-damped", o->stretch.hold_damped,
                 "with --hold: hold with the simulation's damping instead of FIRE (a "
                 "stress-relaxation test)");
-  cmd->add_option("--max-force", o->stretch.max_force,
-                  "end the pull at the first sample (every 0.01 strain) where either clamp's "
-                  "force along it exceeds this (dyn), as a tensile tester's load limit; the "
-                  "summary's stretch.stopped says where (default 0: no limit)")
-      ->check(finite_range(0, 1e12));
-  cmd->add_option("--time-step", o->time_step, "time step of the yarn model (s)")
-      ->check(param_check("time_step"));
+  add_number(cmd, "--max-force", o->stretch.max_force,
+             "end the pull at the first sample (every 0.01 strain) where either clamp's force "
+             "along it exceeds this, as a tensile tester's load limit; the summary's "
+             "stretch.stopped says where",
+             "dyn", closed(0, 1e12), number_text(o->stretch.max_force) + " (no limit)");
+  add_integer(cmd, "--clamp-stitches", o->stretch.clamp_stitches,
+              "columns, rows or corner stitches held by each clamp", 1, 1'000'000, "count");
+  knit::SolverSettings& solver = o->stretch.params.solver;
+  add_time_step_option(cmd, solver.time_step);
   add_integrator_option(cmd, o->integrator);
-  add_implicit_bending_option(cmd, o->implicit_bending);
-  cmd->add_option("--clamp-stitches", o->stretch.clamp_stitches,
-                  "columns, rows or corner stitches held by each clamp");
+  add_implicit_bending_option(cmd, solver.implicit_bending);
+  add_contact_solve_tolerance_option(cmd, solver.contact_solve_tolerance);
+  add_contact_reuse_option(cmd, solver.contact_reuse);
+  add_max_step_halvings_option(cmd, solver.max_step_halvings);
+  add_end_mass_floor_option(cmd, o->stretch.params.discretisation.end_mass_floor);
+  add_contact_points_option(cmd, o->stretch.params.discretisation.contact_points);
   cmd->add_flag("--sheet", o->use_sheet,
                 "stretch the elastic-sheet model (Baraff–Witkin) carrying the knit's geometry, "
                 "quasi-statically, instead of the yarn model");
-  cmd->add_option("--fit", o->fit,
-                  "with --sheet: fit the sheet's stiffnesses to these yarn stretch runs of the "
-                  "same knit (course, wale, bias; comma-separated directories)")
-      ->delimiter(',');
-  cmd->add_option("--k-course", o->sheet.material.k_stretch_u,
-                  "with --sheet: stretch stiffness along the course (dyn/cm)");
-  cmd->add_option("--k-wale", o->sheet.material.k_stretch_v,
-                  "with --sheet: stretch stiffness along the wale (dyn/cm)");
-  cmd->add_option("--k-shear", o->sheet.material.k_shear, "with --sheet: shear stiffness (dyn/cm)");
-  cmd->add_option("--k-bend", o->sheet.material.k_bend,
-                  "with --sheet: bending stiffness per hinge (erg)");
-  cmd->add_option("--node-spacing", o->sheet.node_spacing,
-                  "with --sheet: distance between the sheet's grid nodes (cm)");
-  cmd->add_option("--contact-points", o->contact_points, "contact quadrature points per segment")
-      ->check(CLI::Range(1, 64));
-  cmd->add_option("--alpha-small", o->stretch.params.material.alpha_small,
-                  "non-rigid damping of the small regions per step (default 0.675)")
-      ->check(finite_range(0, 1));
-  cmd->add_option("--alpha-large", o->stretch.params.material.alpha_large,
-                  "non-rigid damping of the large regions per step (default 0.3)")
-      ->check(finite_range(0, 1));
-  cmd->add_option("--yarn-friction", o->stretch.params.material.yarn_friction,
-                  "yarn–yarn Coulomb friction coefficient (default 0: the paper's model, "
-                  "viscous contact damping only)")
-      ->check(param_check("yarn_friction"));
-  add_end_mass_floor_option(cmd, o->stretch.params.discretisation.end_mass_floor);
-  add_max_step_halvings_option(cmd, o->stretch.params.solver.max_step_halvings);
-  cmd->add_option("--rows", o->relax.knit.rows, "rows of the PATTERN's sample")
-      ->check(CLI::Range(2, 1'000'000));
-  cmd->add_option("--cols", o->relax.knit.cols, "stitches per row of the PATTERN's sample")
-      ->check(CLI::Range(2, 1'000'000));
+  cmd->add_option("--fit", o->fit)
+      ->delimiter(',')
+      ->type_name("PATH")
+      ->description(
+          "with --sheet: fit the sheet's stiffnesses to these yarn stretch runs of "
+          "the same knit (course, wale, bias; comma-separated directories)\n" +
+          value_line("paths", "none (the stiffnesses given)"));
+  knit::sheet::SheetMaterial& sheet = o->sheet.material;
+  add_number(cmd, "--k-course", sheet.k_stretch_u,
+             "with --sheet: stretch stiffness along the course", "dyn/cm", positive(1e12));
+  add_number(cmd, "--k-wale", sheet.k_stretch_v, "with --sheet: stretch stiffness along the wale",
+             "dyn/cm", positive(1e12));
+  add_number(cmd, "--k-shear", sheet.k_shear, "with --sheet: shear stiffness", "dyn/cm",
+             positive(1e12));
+  add_number(cmd, "--k-bend", sheet.k_bend, "with --sheet: bending stiffness per hinge", "erg",
+             closed(0, 1e12));
+  add_number(cmd, "--node-spacing", o->sheet.node_spacing,
+             "with --sheet: distance between the sheet's grid nodes", "cm", closed(0.05, 10));
+  add_damping_options(cmd, o->stretch.params.material);
+  add_number(cmd, "--yarn-friction", o->stretch.params.material.yarn_friction,
+             "yarn–yarn Coulomb friction coefficient μ (0: the paper's model, viscous contact "
+             "damping only)",
+             "dimensionless", param("yarn_friction"));
+  add_size_options(cmd, o->relax.knit.rows, o->relax.knit.cols, "rows of the PATTERN's sample",
+                   "stitches per row of the PATTERN's sample");
   cmd->add_flag("--bind-off", o->relax.knit.bind_off,
                 "bind off the PATTERN's last row before relaxing it (see `knitsim relax`)");
   cmd->add_flag("--cast-on", o->relax.knit.cast_on,
                 "cast on the PATTERN's first row before relaxing it (see `knitsim relax`)");
-  cmd->add_option("--relax-time", o->relax_time, "seconds of relaxation before the pull")
-      ->check(finite_positive(knit::MAX_DURATION));
+  add_number(cmd, "--relax-time", o->relax_time, "relaxation of a PATTERN before the pull", "s",
+             positive(knit::MAX_DURATION));
   add_threads_option(cmd, o->threads);
   cmd->add_flag("--no-frames", o->no_frames, "write no states along the way (and no renders)");
   cmd->add_flag("--no-render", o->no_render,
                 "no renders at strains 0, 0.25, 0.5, 1 and no movie of the frames");
-  cmd->add_flag("--quiet,-q", o->quiet, "no progress line");
+  add_quiet_flag(cmd, o->quiet);
   cmd->callback([o, cmd]() {
     if (!o->plot.empty()) {
       if (o->inputs.empty())
@@ -165,22 +179,20 @@ void register_stretch(CLI::App& app) {
       }
     }
     o->stretch.direction = knit::parse_stretch_direction(o->direction);
-    o->stretch.params.discretisation.contact_points = o->contact_points;
-    if (cmd->count("--time-step")) o->stretch.params.solver.time_step = o->time_step;
-    if (cmd->count("--integrator"))
-      o->stretch.params.solver.integrator = knit::parse_integrator(o->integrator);
-    o->stretch.params.solver.implicit_bending = o->implicit_bending;
-    if (o->use_sheet && (cmd->count("--hold") + cmd->count("--hold-time") +
-                             cmd->count("--hold-damped") + cmd->count("--time-step") +
-                             cmd->count("--integrator") + cmd->count("--implicit-bending") +
-                             cmd->count("--yarn-friction") + cmd->count("--end-mass-floor") +
-                             cmd->count("--max-step-halvings") + cmd->count("--max-force") >
-                         0))
+    o->stretch.params.solver.integrator = knit::parse_integrator(o->integrator);
+    if (o->use_sheet &&
+        (cmd->count("--hold") + cmd->count("--hold-time") + cmd->count("--hold-damped") +
+             cmd->count("--time-step") + cmd->count("--integrator") +
+             cmd->count("--implicit-bending") + cmd->count("--contact-solve-tolerance") +
+             cmd->count("--contact-reuse") + cmd->count("--yarn-friction") +
+             cmd->count("--end-mass-floor") + cmd->count("--max-step-halvings") +
+             cmd->count("--max-force") >
+         0))
       throw std::invalid_argument(
           "stretch --sheet: the sheet is pulled through equilibria already; --hold, "
           "--hold-time, --hold-damped, --time-step, --integrator, --implicit-bending, "
-          "--yarn-friction, --end-mass-floor, --max-step-halvings and --max-force are for "
-          "the yarn model");
+          "--contact-solve-tolerance, --contact-reuse, --yarn-friction, --end-mass-floor, "
+          "--max-step-halvings and --max-force are for the yarn model");
     if ((cmd->count("--hold-time") || o->stretch.hold_damped) && !cmd->count("--hold"))
       throw std::invalid_argument("stretch: --hold-time and --hold-damped need --hold");
     o->stretch.out_dir = o->out;

@@ -52,23 +52,18 @@ void register_view(CLI::App& app) {
   auto args = std::make_shared<ViewArgs>();
   CLI::App* sub = app.add_subcommand(
       "view", "write a web page that plays a run's frames as yarn tubes (orbit, time slider)");
-  sub->add_option("input", args->input, "a run's directory (its frames) or one state file")
-      ->required()
-      ->check(CLI::ExistingPath);
-  sub->add_option("--out,-o", args->out, "the page (.html, self-contained: opens offline)")
-      ->required();
-  sub->add_option("--every", args->every, "show every Nth frame (and the last)")
-      ->check(CLI::Range(1, 1000000));
-  sub->add_option("--title", args->title, "shown on the page (default: the input's name)");
-  sub->add_option("--samples", args->viewer.samples_per_segment,
-                  "points along each spline segment (default 4)")
-      ->check(CLI::Range(1, 64));
-  sub->add_option("--sides", args->viewer.sides, "vertices around the tube (default 8)")
-      ->check(CLI::Range(3, 64));
-  sub->add_option("--scene", args->scene,
-                  "draw this scene's objects with the yarn (default: the scene a simulation's "
-                  "summary.json beside the input names)")
-      ->check(CLI::ExistingFile);
+  add_required_path(sub, "input", args->input, "a run's directory (its frames) or one state file")
+      ->check(existing_path());
+  add_out_option(sub, args->out, "the page (.html, self-contained: opens offline)");
+  add_integer(sub, "--every", args->every, "show every Nth frame (and the last)", 1, 1000000,
+              "count");
+  add_text(sub, "--title", args->title, "shown on the page", "text", "the input's name");
+  add_integer(sub, "--samples", args->viewer.samples_per_segment,
+              "points along each spline segment", 1, 64, "count per segment");
+  add_integer(sub, "--sides", args->viewer.sides, "vertices around the tube", 3, 64, "count");
+  add_path(sub, "--scene", args->scene, "draw this scene's objects with the yarn",
+           "the scene a simulation's summary.json beside the input names")
+      ->check(existing_file());
   sub->add_flag("--no-objects", args->no_objects, "draw the yarn alone");
   sub->callback([args] { run_view(*args); });
 }

@@ -51,47 +51,6 @@ std::string command_line() {
   return join_quoted(g_program, g_args);
 }
 
-CLI::Validator finite_range(double lo, double hi) {
-  const std::string desc = "in [" + knit::short_number(lo) + ", " + knit::short_number(hi) + "]";
-  return CLI::Validator(
-      [lo, hi, desc](std::string& text) -> std::string {
-        char* end = nullptr;
-        const double x = std::strtod(text.c_str(), &end);
-        if (end == text.c_str() || *end != '\0') return "'" + text + "' is not a number";
-        if (!std::isfinite(x))
-          return "'" + text + "' is not a finite number (expected one " + desc + ")";
-        if (x < lo || x > hi)
-          return knit::short_number(x) + " is outside the working range " + desc.substr(3);
-        return "";
-      },
-      "FLOAT " + desc);
-}
-
-CLI::Validator param_check(const std::string& name) {
-  const knit::ParamRange& r = knit::param_range(name);
-  return finite_range(r.min, r.max);
-}
-
-CLI::Validator finite_positive(double hi) {
-  const std::string desc = hi < 1e300 ? "in (0, " + knit::short_number(hi) + "]" : "> 0";
-  return CLI::Validator(
-      [hi, desc](std::string& text) -> std::string {
-        char* end = nullptr;
-        const double x = std::strtod(text.c_str(), &end);
-        if (end == text.c_str() || *end != '\0') return "'" + text + "' is not a number";
-        if (!std::isfinite(x))
-          return "'" + text + "' is not a finite number (expected one " + desc + ")";
-        if (!(x > 0) || x > hi) return knit::short_number(x) + " is not " + desc;
-        return "";
-      },
-      "FLOAT " + desc);
-}
-
-void add_threads_option(CLI::App* cmd, int& threads) {
-  cmd->add_option("--threads,-j", threads, "worker threads (0 = all cores)")
-      ->check(CLI::Range(0, 4096));
-}
-
 std::unique_ptr<tbb::global_control> make_thread_control(int threads) {
   if (threads <= 0) return nullptr;
   // TBB runs no more workers than the machine has cores: say so rather than run fewer
@@ -102,74 +61,6 @@ std::unique_ptr<tbb::global_control> make_thread_control(int threads) {
               << (cores == 1 ? " thread" : " threads") << " at once; using " << cores << "\n";
   return std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
                                                static_cast<size_t>(threads));
-}
-
-void add_integrator_option(CLI::App* cmd, std::string& integrator) {
-  cmd->add_option("--integrator", integrator,
-                  "explicit: explicit midpoint for every term (the reference); imex: the same "
-                  "but the length energy taken by a linearly implicit Euler step, which lifts "
-                  "the time-step limit its stiffness sets; imex-contact: yarn–yarn contact "
-                  "implicit too (each segment's own contact stiffness in the solve, the "
-                  "coupling between segments at the step's start velocity unless the scene "
-                  "sets contact_solve_tolerance), which lifts the limit contact sets in "
-                  "simulation (a 42×32 knit hanging holds 1.6e-3 s, not 2e-3 s: watch the "
-                  "closest approach d; docs/model.md §5.2)")
-      ->check(CLI::IsMember(knit::integrator_names()));
-}
-
-void add_implicit_bending_option(CLI::App* cmd, bool& implicit_bending) {
-  cmd->add_flag("--implicit-bending,!--no-implicit-bending", implicit_bending,
-                "with --integrator imex or imex-contact: the bending energy implicit too (its "
-                "stiffness in the solve), which lifts the time-step limit bending sets "
-                "(docs/model.md §5.2; --no-implicit-bending: explicit, where a resumed "
-                "relaxation had it)");
-}
-
-void add_end_mass_floor_option(CLI::App* cmd, double& floor) {
-  cmd->add_option("--end-mass-floor", floor,
-                  "each yarn end's two control points get at least this fraction of an interior "
-                  "one's mass (default 0: the row sums, 1/24 at the last point; 0.5 stops a free "
-                  "end jittering when nothing damps it, as with --yarn-friction)")
-      ->check(param_check("end_mass_floor"));
-}
-
-void add_max_step_halvings_option(CLI::App* cmd, int& halvings) {
-  cmd->add_option("--max-step-halvings", halvings,
-                  "a step that fails (the yarn torn apart in it, a value not finite, the "
-                  "projection not converged) is taken again in two halves, up to this many "
-                  "times (h/2ⁿ); a simulation keeps the halved step to its end, a FIRE "
-                  "relaxation tries h again after 20 good steps; the summary's step_halvings "
-                  "counts them (default 0: the run stops at the first failed step)")
-      ->check(param_check("max_step_halvings"));
-}
-
-void add_contact_solve_tolerance_option(CLI::App* cmd, double& tolerance, const std::string& more) {
-  cmd->add_option("--contact-solve-tolerance", tolerance,
-                  "with --integrator imex-contact: 0 (the default) solves each step once, "
-                  "contact's coupling between segments taken at the step's start velocity; "
-                  "> 0 solves the whole linear system by conjugate gradients until the "
-                  "residual is this fraction of its right-hand side (docs/model.md §5.2)" +
-                      more)
-      ->check(param_check("contact_solve_tolerance"));
-}
-
-void add_contact_reuse_option(CLI::App* cmd, double& reuse) {
-  cmd->add_option("--contact-reuse", reuse,
-                  "with --integrator imex-contact: reuse an exact contact evaluation's "
-                  "linearisation (and, without length constraints, the step's matrix) while "
-                  "every control point stays within this many yarn radii of where it was "
-                  "made; 0 (the default) evaluates contact every step. 0.05 cuts a 42×32 "
-                  "FIRE relaxation's step by a third to a half (docs/model.md §5.2)")
-      ->check(param_check("contact_reuse"));
-}
-
-void add_export_option(CLI::App* cmd, std::string& format) {
-  cmd->add_option(
-         "--export", format,
-         "also export the result: usd (every state, time-sampled, as frames.usda), or the "
-         "final state as final.EXT in obj, bcc, ply, vtp (polylines), obj-mesh, ply-mesh or "
-         "glb (yarn tubes); `knitsim export` has the options")
-      ->check(CLI::IsMember(knit::export_formats()));
 }
 
 void export_run(const std::string& out_dir, const std::string& format,

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "knit/solver/runner.hpp"
+#include "options.hpp"
 
 namespace knitsim {
 
@@ -25,36 +26,8 @@ std::string command_line();
 /// The command line's arguments after the program name.
 const std::vector<std::string>& command_args();
 
-/// A CLI11 check: a finite number in [lo, hi] (NaN and infinities refused; the message
-/// names the range without printing 300 digits).
-CLI::Validator finite_range(double lo, double hi);
-/// finite_range over a parameter's working range in knit::param_ranges() (by its name).
-CLI::Validator param_check(const std::string& name);
-/// A CLI11 check: a finite number > 0 and at most `hi`.
-CLI::Validator finite_positive(double hi = 1e300);
-
-/// --integrator explicit|imex (knit::Integrator), into `integrator`.
-void add_integrator_option(CLI::App* cmd, std::string& integrator);
-/// --implicit-bending (knit::SolverSettings::implicit_bending), into `implicit_bending`.
-void add_implicit_bending_option(CLI::App* cmd, bool& implicit_bending);
-/// --end-mass-floor (Discretisation::end_mass_floor, a fraction of an interior mass).
-void add_end_mass_floor_option(CLI::App* cmd, double& floor);
-/// --contact-solve-tolerance: imex-contact's conjugate-gradient tolerance (simulate, relax);
-/// `more` is added to its help.
-void add_contact_solve_tolerance_option(CLI::App* cmd, double& tolerance,
-                                        const std::string& more = "");
-/// --max-step-halvings (SolverSettings::max_step_halvings: a failed step taken again in
-/// halves, step_halving.hpp).
-void add_max_step_halvings_option(CLI::App* cmd, int& halvings);
-/// --contact-reuse (SolverSettings::contact_reuse, yarn radii).
-void add_contact_reuse_option(CLI::App* cmd, double& reuse);
-
-/// Adds --threads N (0 = all cores).
-void add_threads_option(CLI::App* cmd, int& threads);
 /// Limits TBB to `threads` workers for the lifetime of the returned object (0: no limit).
 std::unique_ptr<tbb::global_control> make_thread_control(int threads);
-/// Adds --export usd|obj|bcc|ply.
-void add_export_option(CLI::App* cmd, std::string& format);
 /// Exports a finished run: usd → DIR/frames.usda (every written state as time samples),
 /// obj|bcc|ply → DIR/final.<ext>. Nothing when `format` is empty.
 /// A scene's `objects` go into the USD beside the yarn.

@@ -16,6 +16,8 @@ int main(int argc, char** argv) {
   CLI::App app{"knitsim " KNIT_VERSION " — yarn-level simulation of knitted cloth"};
   app.set_version_flag("--version", "knitsim " KNIT_VERSION);
   app.require_subcommand(1);
+  // before the subcommands, which take the formatter over
+  app.formatter(knitsim::help_formatter());
   knitsim::register_simulate(app);
   knitsim::register_relax(app);
   knitsim::register_export(app);
@@ -25,6 +27,8 @@ int main(int argc, char** argv) {
   knitsim::register_mesh(app);
   knitsim::register_view(app);
   knitsim::register_version(app);
+  app.footer(knitsim::help_footer());
+  for (CLI::App* sub : app.get_subcommands({})) sub->footer(knitsim::help_footer());
   // an output named "" would be no output at all: refused by every command alike
   const CLI::Validator named(
       [](std::string& s) {
@@ -50,23 +54,25 @@ int main(int argc, char** argv) {
     if (!known) {
       std::cerr << "knitsim: error: unknown command '" << knit::printable(argv[1]) << "' (one of "
                 << names << "; knitsim --help says more)\n";
-      return static_cast<int>(CLI::ExitCodes::ExtrasError);
+      return knitsim::EXIT_ERROR;  // a command line refused (docs/cli.md, "Exit codes")
     }
   }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    // --help and --version end here too (0); every command line refused exits as any
+    // other refused input does (docs/cli.md, "Exit codes")
+    return app.exit(e) == 0 ? knitsim::EXIT_OK : knitsim::EXIT_ERROR;
   } catch (const knitsim::RunFailed&) {
-    return 2;
+    return knitsim::EXIT_RUN_FAILED;
   } catch (const knitsim::RunInterrupted& e) {
     return 128 + e.signal;
   } catch (const std::bad_alloc&) {
     std::cerr << "knitsim: error: out of memory (the request is too large for this machine)\n";
-    return 1;
+    return knitsim::EXIT_ERROR;
   } catch (const std::exception& e) {
     std::cerr << "knitsim: error: " << e.what() << "\n";
-    return 1;
+    return knitsim::EXIT_ERROR;
   }
-  return 0;
+  return knitsim::EXIT_OK;
 }

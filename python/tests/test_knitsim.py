@@ -6,7 +6,9 @@ Run through ctest (scripts/test.sh), or by hand:
 import json
 import os
 import pathlib
+import re
 import signal
+import subprocess
 import threading
 
 import numpy as np
@@ -16,7 +18,11 @@ import knitsim
 
 EXAMPLES = pathlib.Path(os.environ.get("KNIT_EXAMPLES",
                                        pathlib.Path(__file__).parents[2] / "examples"))
+TEST_DATA = pathlib.Path(__file__).parents[2] / "tests" / "data"
 G = 981.0  # cm/s², MODEL.md's gravity
+# the knitsim program built beside the module (build/knitsim beside build/python/)
+KNITSIM = pathlib.Path(os.environ.get(
+    "KNIT_APP", pathlib.Path(knitsim.__file__).resolve().parents[1] / "knitsim"))
 
 
 @pytest.fixture(scope="module")
@@ -88,7 +94,7 @@ def test_fire_relaxation_widens_the_contact_reuse_far_from_rest():
     s = k.summary
     assert s["contact_reuse_widen"] == {"max": 3.0, "residual": 1.0}
     assert 2.0 < s["contact_reuse_scale_mean"] <= 3.0
-    with pytest.raises(ValueError, match="contact-reuse-widen"):
+    with pytest.raises(ValueError, match="contact_reuse_widen = 2 .*give contact_reuse "):
         knitsim.relax("garter", rows=3, cols=3, max_time=0.01, contact_reuse_widen=2.0)
 
 def test_bind_off_ties_the_last_row(tmp_path):
@@ -105,7 +111,7 @@ def test_bind_off_ties_the_last_row(tmp_path):
     again = knitsim.relax(resume=str(tmp_path / "b" / "relaxed.kstate"), max_time=0.002)
     assert again.summary["bind_off"] is True and again.summary["pattern"] == "stockinette"
     assert again.summary["rows"] == 3 and again.summary["cols"] == 4
-    with pytest.raises(ValueError, match="bind-off"):
+    with pytest.raises(ValueError, match="bind_off=True"):
         knitsim.relax(resume=str(tmp_path / "b" / "relaxed.kstate"), bind_off=False,
                       max_time=0.002)
     with pytest.raises(TypeError, match="resume"):
@@ -121,7 +127,7 @@ def test_cast_on_ties_the_first_row(tmp_path):
     assert f.knit["cast_on"] is True
     again = knitsim.relax(resume=str(tmp_path / "c" / "relaxed.kstate"), max_time=0.002)
     assert again.summary["cast_on"] is True
-    with pytest.raises(ValueError, match="cast-on"):
+    with pytest.raises(ValueError, match="cast_on=True"):
         knitsim.relax(resume=str(tmp_path / "c" / "relaxed.kstate"), cast_on=False,
                       max_time=0.002)
 
@@ -285,7 +291,7 @@ def test_stretch_stops_at_a_load_limit(saved_knit):
     assert stop["reason"] == "max_force" and stop["strain"] < 0.05
     assert max(stop["force_moving_dyn"], stop["force_fixed_dyn"]) > limit
     assert all(r["curve"]["force_moving"][:-1] <= limit)
-    with pytest.raises(ValueError, match="max-force"):
+    with pytest.raises(ValueError, match="max_force"):
         knitsim.stretch(saved_knit, to=0.02, max_force=-1)
 
 
@@ -294,7 +300,7 @@ def test_errors_are_the_librarys_messages(tmp_path):
         knitsim.relax("no_such_pattern", rows=4, cols=4)
     with pytest.raises(ValueError, match="rows"):
         knitsim.relax("stockinette", rows=1, cols=4)
-    with pytest.raises(RuntimeError, match="missing.kstate"):
+    with pytest.raises(FileNotFoundError, match="missing.kstate"):
         knitsim.read_state(str(tmp_path / "missing.kstate"))
     bad = tmp_path / "bad.json"
     bad.write_text('{"yarns": [}')
@@ -351,6 +357,218 @@ def test_resume_goes_on_as_the_relaxation_went(tmp_path):
     imex = knitsim.relax(resume=first, max_time=0.006, params={"integrator": "imex"})
     assert imex.summary["params"]["solver"]["contact_reuse"] == 0.0
     assert "contact_reuse_widen" not in imex.summary
+
+
+# ---------------------------------------------------------------- the commands' options
+
+def cli(*args):
+    if not KNITSIM.exists():
+        pytest.skip(f"no knitsim program at {KNITSIM}")
+    return subprocess.run([str(KNITSIM), *map(str, args)], capture_output=True, text=True)
+
+
+def cli_options(command):
+    """The long option names `knitsim COMMAND --help` lists, without their dashes."""
+    names = []
+    for line in cli(command, "--help").stdout.splitlines():
+        if line.startswith("  ") and not line.startswith("   "):
+            for name in line[2:].split("  ")[0].split(" ")[0].split(","):
+                if name.startswith("--") and name != "--help":
+                    names.append(name[2:])
+    return names
+
+
+def keywords(function):
+    """The keyword arguments of a module function, from its signature line."""
+    return set(re.findall(r"(\w+): ", function.__doc__.splitlines()[0]))
+
+
+# the options spelt otherwise in Python (docs/cli.md, "From Python")
+SPELT = {"round": "in_the_round", "ke-threshold": "rest", "quiet": "progress",
+         "no-frames": "frames", "no-render": "render", "no-fire": "fire",
+         "no-implicit-bending": "implicit_bending"}
+
+
+def test_python_takes_every_option_of_the_commands():
+    # each command's options are keywords of the function that stands for it; the few
+    # that belong elsewhere in Python say where
+    elsewhere = {
+        "relax": {"from": None, "scale": knitsim.relax_yarns},  # relax_yarns(path, …)
+        "simulate": {"knit": knitsim.load_scene},
+        # a PATTERN is relaxed first by relax(); --plot draws runs, which Python plots itself
+        "stretch": {"from": None, "plot": None, "rows": knitsim.relax, "cols": knitsim.relax,
+                    "bind-off": knitsim.relax, "cast-on": knitsim.relax, "relax-time": None},
+    }
+    functions = {"relax": knitsim.relax, "simulate": knitsim.Scene.run,
+                 "stretch": knitsim.stretch}
+    for command, function in functions.items():
+        options = cli_options(command)
+        assert len(options) > 10, command
+        for option in options:
+            target = elsewhere.get(command, {}).get(option, function)
+            if target is None:
+                continue
+            kw = SPELT.get(option, option.replace("-", "_"))
+            assert kw in keywords(target), f"{command} --{option}: no keyword {kw}"
+    # relax_yarns takes what `relax --from` takes
+    for option in ("scale", "shrink", "max-time", "time-step", "integrator", "k-global",
+                   "check-every", "threads", "export"):
+        assert option.replace("-", "_") in keywords(knitsim.relax_yarns), option
+
+
+def same_run(summary, other):
+    for key in ("params", "steps", "status"):
+        assert summary[key] == other[key], key
+
+
+def test_relax_has_the_commands_defaults(tmp_path):
+    out = tmp_path / "cli"
+    r = cli("relax", "stockinette", "--rows", 3, "--cols", 4, "--max-time", 0.003, "--out", out,
+            "--quiet")
+    assert r.returncode == 0, r.stderr
+    by_cli = json.loads((out / "summary.json").read_text())
+    k = knitsim.relax("stockinette", rows=3, cols=4, max_time=0.003)
+    same_run(k.summary, by_cli)
+    for key in ("method", "rest_test", "ke_per_length_threshold", "shrink", "k_global"):
+        assert k.summary.get(key) == by_cli.get(key), key
+    cli_state = knitsim.read_state(str(out / "final.kstate")).state
+    assert np.allclose(k.state.q, cli_state.q, rtol=0, atol=1e-9)
+
+
+def test_stretch_and_simulate_have_the_commands_defaults(saved_knit, tmp_path):
+    out = tmp_path / "pull"
+    r = cli("stretch", "--from", saved_knit, "--to", 0.02, "--out", out, "--no-render", "--quiet")
+    assert r.returncode == 0, r.stderr
+    by_cli = json.loads((out / "summary.json").read_text())
+    same_run(knitsim.stretch(saved_knit, to=0.02)["summary"], by_cli)
+    scene = str(EXAMPLES / "pendulum.json")
+    out = tmp_path / "sim"
+    r = cli("simulate", scene, "--duration", 0.01, "--out", out, "--quiet")
+    assert r.returncode == 0, r.stderr
+    by_cli = json.loads((out / "summary.json").read_text())
+    sc = knitsim.load_scene(scene)
+    same_run(sc.run(duration=0.01)["summary"], by_cli)
+
+
+def test_relax_takes_the_solver_and_damping_options(tmp_path):
+    k = knitsim.relax("stockinette", rows=3, cols=3, max_time=0.004, integrator="imex",
+                      time_step=2e-4, implicit_bending=True, max_step_halvings=2,
+                      contact_points=8, end_mass_floor=0.5, k_global=1.5, alpha_small=0.5,
+                      alpha_large=0.2, check_every=5, threads=1, out=str(tmp_path / "r"),
+                      frames=False, export="obj")
+    assert k.status == "ok" and k.steps == 20
+    p = k.summary["params"]
+    assert p["solver"]["integrator"] == "imex" and p["solver"]["time_step"] == 2e-4
+    assert p["solver"]["implicit_bending"] is True and p["solver"]["max_step_halvings"] == 2
+    assert p["discretisation"] == {**p["discretisation"], "contact_points": 8,
+                                   "end_mass_floor": 0.5}
+    assert (p["material"]["k_global"], p["material"]["alpha_small"],
+            p["material"]["alpha_large"]) == (1.5, 0.5, 0.2)
+    assert (tmp_path / "r" / "final.obj").exists()  # --export
+    assert not (tmp_path / "r" / "frames").exists()  # --no-frames
+    # a keyword wins over the same parameter in `params`
+    k = knitsim.relax("stockinette", rows=3, cols=3, max_time=0.002, params={"time_step": 1e-4},
+                      time_step=2e-4, integrator="imex")
+    assert k.summary["params"]["solver"]["time_step"] == 2e-4
+
+
+def test_relax_yarns_relaxes_a_yarn_file():
+    k = knitsim.relax_yarns(str(TEST_DATA / "yarns" / "knit-2x2.yarns"), max_time=0.001)
+    assert k.status == "ok"
+    # imported swatches start tightly packed: the recipe's smaller step
+    assert k.summary["params"]["solver"]["time_step"] == pytest.approx(1 / 25000)
+    assert k.model.num_cp > 0
+
+
+def test_scene_run_takes_the_simulate_options(tmp_path):
+    sc = knitsim.load_scene(str(EXAMPLES / "pendulum.json"))
+    h, duration = sc.model.time_step, sc.duration
+    r = sc.run(duration=0.01, time_step=h / 2, integrator="imex", max_step_halvings=2,
+               output_every=10, threads=1, out=str(tmp_path / "a"), export="usd")
+    assert r["status"] == "ok" and r["steps"] == round(0.01 / (h / 2))
+    solver = r["summary"]["params"]["solver"]
+    assert solver["time_step"] == h / 2 and solver["integrator"] == "imex"
+    assert solver["max_step_halvings"] == 2
+    assert (tmp_path / "a" / "frames.usda").exists()
+    # the options were this run's: the scene keeps its own, its state is the run's last
+    assert sc.model.time_step == h and sc.duration == duration
+    assert sc.state.time == pytest.approx(0.01)
+    # resumed from the state it wrote, a run goes on to a longer duration
+    again = knitsim.load_scene(str(EXAMPLES / "pendulum.json"))
+    r = again.run(resume=str(tmp_path / "a" / "final.kstate"), duration=0.02, time_step=h / 2,
+                  out=str(tmp_path / "b"))
+    assert r["status"] == "ok" and again.state.time == pytest.approx(0.02)
+    with pytest.raises(ValueError, match="^resume .*already at the scene's end"):
+        again.run(resume=str(tmp_path / "a" / "final.kstate"), duration=0.01)
+    with pytest.raises(ValueError, match="^duration: "):
+        again.run(duration=-1)
+
+
+def test_stretch_takes_the_commands_options(saved_knit):
+    r = knitsim.stretch(saved_knit, to=0.02, time_step=5e-5, alpha_small=0.5, alpha_large=0.2,
+                        yarn_friction=0.3, contact_points=8, end_mass_floor=0.5,
+                        max_step_halvings=1, threads=1)
+    assert r["status"] == "ok"
+    p = r["summary"]["params"]
+    assert p["solver"]["time_step"] == 5e-5 and p["solver"]["max_step_halvings"] == 1
+    assert (p["material"]["alpha_small"], p["material"]["alpha_large"],
+            p["material"]["yarn_friction"]) == (0.5, 0.2, 0.3)
+    assert (p["discretisation"]["contact_points"], p["discretisation"]["end_mass_floor"]) == (8, 0.5)
+    # the elastic sheet, as `stretch --sheet` (on a knit wide enough for its grid)
+    sheet = knitsim.stretch(str(EXAMPLES / "knits" / "stockinette_12x12.kstate"), to=0.05,
+                            sheet=True, k_course=2e4, node_spacing=0.6)
+    assert sheet["status"] == "ok" and sheet["summary"]["model"] == "sheet"
+    assert sheet["summary"]["sheet"]["material"]["k_stretch_u_dyn_per_cm"] == 2e4
+    assert sheet["summary"]["sheet"]["node_spacing_cm"] == 0.6
+    assert sheet["curve"]["force_moving"][-1] > 0
+
+
+def test_errors_name_the_keyword_not_the_option(saved_knit, tmp_path):
+    cases = [
+        (lambda: knitsim.relax("stockinette", rows=1, cols=4), "rows"),
+        (lambda: knitsim.relax("stockinette", rows=3, cols=3, max_time=-1), "max_time"),
+        (lambda: knitsim.relax("stockinette", rows=3, cols=3, rest=-1.0), "rest"),
+        (lambda: knitsim.relax("stockinette", rows=3, cols=3, time_step=1.0), "time_step"),
+        (lambda: knitsim.relax("stockinette", rows=3, cols=3, integrator="implicit"),
+         "integrator"),
+        (lambda: knitsim.relax("stockinette", rows=3, cols=3, check_every=0), "check_every"),
+        (lambda: knitsim.relax("stockinette", rows=3, cols=3, fire=True, alpha_small=0.5),
+         "alpha_small"),
+        (lambda: knitsim.relax("stockinette", rows=3, cols=3, out=str(tmp_path / "x"),
+                               export="stl"), "export"),
+        (lambda: knitsim.stretch(saved_knit, to=20), "to"),
+        (lambda: knitsim.stretch(saved_knit, to=0.02, speed=0), "speed"),
+        (lambda: knitsim.stretch(saved_knit, to=0.1, hold=0.05, hold_time=-1), "hold_time"),
+        (lambda: knitsim.stretch(saved_knit, to=0.02, clamp_stitches=0), "clamp_stitches"),
+        (lambda: knitsim.stretch(saved_knit, to=0.02, sheet=True, yarn_friction=0.3),
+         "yarn_friction"),
+        (lambda: knitsim.stretch(saved_knit, to=0.02, k_course=1e4), "k_course"),
+    ]
+    for call, kw in cases:
+        with pytest.raises(ValueError) as e:
+            call()
+        message = str(e.value)
+        assert re.search(rf"\b{kw}\b", message), (kw, message)
+        assert " --" not in message and not message.startswith("--"), message
+
+
+def test_a_missing_file_raises_file_not_found_naming_the_keyword(saved_knit, tmp_path):
+    missing = str(tmp_path / "missing.kstate")
+    pendulum = str(EXAMPLES / "pendulum.json")
+    cases = [
+        (lambda: knitsim.read_state(missing), "path"),
+        (lambda: knitsim.relax(resume=missing), "resume"),
+        (lambda: knitsim.load_scene(str(tmp_path / "missing.json")), "path"),
+        (lambda: knitsim.load_scene(pendulum, knit=missing), "knit"),
+        (lambda: knitsim.load_scene(pendulum).run(resume=missing), "resume"),
+        (lambda: knitsim.stretch(missing, to=0.02), "kstate"),
+        (lambda: knitsim.stretch(saved_knit, to=0.02, out=str(tmp_path / "o"), resume=missing),
+         "resume"),
+        (lambda: knitsim.relax_yarns(str(tmp_path / "missing.yarns")), "path"),
+    ]
+    for call, kw in cases:
+        with pytest.raises(FileNotFoundError, match=rf"^{kw}: .*missing"):
+            call()
 
 
 def test_a_knitout_program_of_any_name_is_read_as_knitout(tmp_path):

@@ -716,7 +716,7 @@ TEST(Cli, SheetStretchRefusesBadRequestsAndRuns) {
   EXPECT_NE(r.output.find("need --sheet"), std::string::npos) << r.output;
   r = run("stretch --from " + knit + " --sheet --k-shear -5 --out " + dir);
   EXPECT_EQ(r.code, 1);
-  EXPECT_NE(r.output.find("k_shear"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("--k-shear"), std::string::npos) << r.output;
   EXPECT_FALSE(std::filesystem::exists(dir));
   // the held protocol, yarn friction and the load limit are the yarn model's, --hold's
   // options go with it, and the load limit is not below 0: each refused by name

@@ -78,8 +78,7 @@ void check_input_path(const std::string& path, const char* what) {
   namespace fs = std::filesystem;
   std::error_code ec;
   const fs::file_status st = fs::status(path, ec);
-  if (ec || !fs::exists(st))
-    throw std::runtime_error(path + ": cannot open " + what + " (no such file)");
+  if (ec || !fs::exists(st)) throw FileNotFound(path + ": cannot open " + what + " (no such file)");
   if (fs::is_directory(st))
     throw std::runtime_error(path + ": is a directory; expected a " + std::string(what));
   if (!fs::is_regular_file(st))

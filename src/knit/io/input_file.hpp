@@ -3,6 +3,7 @@
 // regular file (a directory, FIFO or device such as /dev/zero is refused by name), and
 // its size must be within the reader's limit, checked before anything is read.
 #include <cstddef>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 
@@ -16,9 +17,17 @@ inline constexpr std::size_t MAX_GEOMETRY_BYTES = 1ull << 30;  ///< .yarns/.bcc/
 inline constexpr std::size_t MAX_STATE_BYTES = 4ull << 30;     ///< .kstate
 inline constexpr std::size_t MAX_CSV_BYTES = 1ull << 30;       ///< a CSV to plot
 
+/// A file that is not there (read_input_file, check_input_path): the Python module raises
+/// FileNotFoundError for it, the command line exits as for any refused input.
+class FileNotFound : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
 /// The contents of `path`, a regular file of at most `max_bytes`; `what` names the kind of
 /// file in messages ("scene file", "chart", …). Throws std::runtime_error naming the path
-/// and what is wrong (missing, a directory, not a regular file, too large, unreadable).
+/// and what is wrong (missing: FileNotFound; a directory, not a regular file, too large,
+/// unreadable).
 std::string read_input_file(const std::string& path, std::size_t max_bytes, const char* what);
 
 /// The checks of read_input_file on the path alone (exists, not a directory, a regular
