@@ -7,6 +7,7 @@
 #include <fstream>
 #include <iomanip>
 #include <limits>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -462,9 +463,10 @@ std::string stretch_label(const StateFile& file, StretchDirection direction) {
 namespace {
 
 // StretchOptions::resume: checks that the state and the curve so far belong to this pull,
-// puts the state into the scene and the curve into the result; returns the state's path
+// puts the state into the scene, the curve into the result and the run's totals so far
+// into `totals`; returns the state's path
 std::string resume_stretch(const StretchOptions& o, Scene& scene, bool held,
-                           StretchResult& result) {
+                           StretchResult& result, std::optional<RunTotals>& totals) {
   const std::string what = "--resume " + o.resume;
   if (held)
     throw std::invalid_argument(what +
@@ -484,7 +486,8 @@ std::string resume_stretch(const StretchOptions& o, Scene& scene, bool held,
   if (!resumes_in_place(path, o.out_dir))
     throw std::invalid_argument(what + ": not a state of the run in " + o.out_dir +
                                 " (its final.kstate or frames/)");
-  const State state = read_state_file(path).state;
+  StateFile file = read_state_file(path);
+  const State& state = file.state;
   if (state.q.size() != scene.state.q.size())
     throw std::invalid_argument(what + ": it holds " + std::to_string(state.q.size() / 3) +
                                 " control points, the knit pulled has " +
@@ -528,6 +531,7 @@ std::string resume_stretch(const StretchOptions& o, Scene& scene, bool held,
         ": resume with the run's own knit, --direction, --to, --speed and --cycles");
   scene.state = state;
   result.curve = std::move(curve);
+  totals = std::move(file.run);
   return path;
 }
 
@@ -621,7 +625,9 @@ StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions&
   scene.duration = static_cast<double>(steps) * h;
   scene.output_every = static_cast<int>(std::min<long long>(output_every, 1'000'000'000));
   const Clamp& moving = scene.model.clamps[1];
-  const std::string resumed_from = o.resume.empty() ? "" : resume_stretch(o, scene, held, result);
+  std::optional<RunTotals> resumed_totals;
+  const std::string resumed_from =
+      o.resume.empty() ? "" : resume_stretch(o, scene, held, result, resumed_totals);
   if (!o.out_dir.empty() && resumed_from.empty()) prepare_run_directory(o.out_dir, o.overwrite);
 
   const fs::path csv_path = fs::path(o.out_dir) / "stretch.csv";
@@ -673,6 +679,7 @@ StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions&
   so.progress = o.progress;
   so.write_frames = o.write_frames;
   so.continue_in_place = !resumed_from.empty();
+  so.resumed_totals = resumed_totals;
   so.resume_command = o.resume_command;
   RunOptions run = scene_run_options(scene, so);
   run.on_output = sample;
