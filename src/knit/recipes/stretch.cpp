@@ -2,6 +2,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -158,23 +159,33 @@ nlohmann::json stretch_measures(const std::vector<StretchSample>& all, double to
   return m;
 }
 
+namespace {
+// a number as the shortest text that reads back as the same double: a pull resumed from
+// its directory reads its curve so far back from stretch.csv, and its summary's measures
+// (work, width change, edge curl) are then the uninterrupted pull's, bit for bit
+std::string csv_number(double v) {
+  char buf[32];
+  const auto res = std::to_chars(buf, buf + sizeof(buf), v);
+  return std::string(buf, res.ptr);
+}
+}  // namespace
+
 void write_stretch_csv(const std::vector<StretchSample>& curve, const std::string& path) {
-  std::ostringstream o;
-  o << "time_s,strain,force_fixed_dyn,force_moving_dyn,width_cm,potential_energy_erg,"
-       "kinetic_energy_erg,min_contact_distance,edge_curl,force_residual,equilibrium\n"
-    << std::setprecision(10);
+  std::string o =
+      "time_s,strain,force_fixed_dyn,force_moving_dyn,width_cm,potential_energy_erg,"
+      "kinetic_energy_erg,min_contact_distance,edge_curl,force_residual,equilibrium\n";
   for (const StretchSample& s : curve) {
-    o << s.time << "," << s.strain << "," << s.force_fixed << "," << s.force_moving << ","
-      << s.width << "," << s.potential_energy << "," << s.kinetic_energy << ","
-      << s.min_contact_distance << "," << s.edge_curl << ",";
-    o << (std::isfinite(s.force_residual) ? s.force_residual : -1.0) << ","
-      << (s.equilibrium ? 1 : 0) << "\n";
+    for (double v : {s.time, s.strain, s.force_fixed, s.force_moving, s.width,
+                     s.potential_energy, s.kinetic_energy, s.min_contact_distance, s.edge_curl,
+                     std::isfinite(s.force_residual) ? s.force_residual : -1.0})
+      o += csv_number(v) + ",";
+    o += s.equilibrium ? "1\n" : "0\n";
   }
-  write_file_atomic(path, o.str());
+  write_file_atomic(path, o);
 }
 
 namespace {
-// stretch.csv keeps ten significant digits
+// (stretch.csv's times read back exactly; written by earlier builds, to ten significant digits)
 bool same_time(double a, double b) {
   return std::abs(a - b) <= 1e-8 * std::max(1.0, std::abs(b));
 }
