@@ -138,6 +138,7 @@ void register_relax(CLI::App& app) {
     if (!o->resume.empty() && o->from.empty()) {
       // a state written by `relax` says what it is: the knit's options default to its own
       const knit::StateFile f = knit::read_state_file(o->resume);
+      o->run.resumed_totals = f.run;  // (a run that goes on in its directory goes on adding up)
       if (f.knit) {
         if (o->pattern.empty()) o->pattern = f.knit->pattern;
         if (!given("--rows")) o->knit.knit.rows = f.knit->rows;

@@ -93,6 +93,7 @@ void register_simulate(CLI::App& app) {
                                     " s): give a longer --duration to go on");
       scene.state = f.state;
       run.continue_in_place = knit::resumes_in_place(opts->resume, opts->out);
+      run.resumed_totals = f.run;
       run.extra["resumed_from"] = opts->resume;
     }
     auto control = make_thread_control(opts->threads);

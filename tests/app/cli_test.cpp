@@ -252,7 +252,8 @@ TEST(Cli, RelaxTakesTheContactReuse) {
   EXPECT_GT(w["contact_reuse_scale_mean"].get<double>(), 2.0);
   EXPECT_LE(w["contact_reuse_scale_mean"].get<double>(), 3.0);
   // resumed in place (no output at the start), with no check in its 25 steps: widened from
-  // its first step by the state it starts from
+  // its first step by the state it starts from (the summary covers the whole run: its 50
+  // steps at the scale it had and these 25 at 3)
   const Result again =
       run("relax --fire --integrator imex-contact --time-step 6e-4 --contact-reuse 0.05 "
           "--contact-reuse-widen 3 --contact-reuse-widen-residual 1 --max-time 0.015 "
@@ -261,8 +262,11 @@ TEST(Cli, RelaxTakesTheContactReuse) {
   ASSERT_EQ(again.code, 0) << again.output;
   std::ifstream in_again(out + "_wide/summary.json");
   const auto a = nlohmann::json::parse(in_again);
-  EXPECT_EQ(a["steps"].get<int>(), 25);
-  EXPECT_EQ(a["contact_reuse_scale_mean"].get<double>(), 3.0);
+  const int first = w["steps"].get<int>();
+  ASSERT_EQ(a["steps"].get<int>(), first + 25);
+  EXPECT_NEAR(a["contact_reuse_scale_mean"].get<double>() * (first + 25) -
+                  w["contact_reuse_scale_mean"].get<double>() * first,
+              3.0 * 25, 1e-9);
   // widening without reuse, or narrowing, is refused by name before anything is written
   const Result unused = run(
       "relax garter --fire --integrator imex-contact --contact-reuse-widen 2 --out " + out + "_u");

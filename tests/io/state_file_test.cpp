@@ -4,6 +4,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <cmath>
 #include <limits>
 #include <utility>
 #include <vector>
@@ -191,6 +192,93 @@ TEST(StateFile, RelaxationSettingsRoundTrip) {
     spoil(bad);
     refused(bad, key);
   }
+}
+
+// a run's totals (what a resumed run goes on adding up) round-trip field for field, the
+// extremes not reached yet included; a file without them is written as version 3, which
+// earlier builds read; a bad field is refused naming it
+TEST(StateFile, RunTotalsRoundTrip) {
+  const std::string path = ::testing::TempDir() + "/run_totals.kstate";
+  auto version = [&] {
+    std::ifstream in(path, std::ios::binary);
+    in.seekg(8);
+    uint32_t v = 0;
+    in.read(reinterpret_cast<char*>(&v), 4);
+    return v;
+  };
+  StateFile f = sample();
+  write_state_file(path, f);
+  EXPECT_EQ(version(), 3u);
+  EXPECT_FALSE(read_state_file(path).run.has_value());
+  RunTotals t;
+  EXPECT_EQ(to_json(t)["min_contact_distance"], nullptr);  // none yet: +infinity
+  write_state_file(path, [&] {
+    StateFile g = f;
+    g.run = t;
+    return g;
+  }());
+  EXPECT_EQ(version(), 4u);
+  EXPECT_EQ(to_json(*read_state_file(path).run), to_json(t));
+  EXPECT_TRUE(std::isinf(read_state_file(path).run->min_contact_distance));
+  t.start_time = 0.1;
+  t.end_time = 0.30000000000000004;
+  t.steps = 1234;
+  t.shortened_steps = {0.7e-4, 0.7e-4};
+  t.frames_written = 13;
+  t.contact_steps = 1200;
+  t.contact_pairs_sum = 123456.5;
+  t.min_contact_distance = 0.7601234567890123;
+  t.contact_linearised = 7;
+  t.matrix_kept = 9;
+  t.reuse_scale_sum = 1234.0000000000002;
+  t.solve_steps = 5;
+  t.solve_iterations = 55;
+  t.solve_iterations_max = 17;
+  t.solve_residual_max = 1e-7 / 3;
+  t.friction_steps = 3;
+  t.friction_pairs = 44;
+  t.friction_stuck = 40;
+  t.friction_passes = 12;
+  t.friction_passes_max = 5;
+  t.friction_work = 2.0 / 3;
+  t.halving = {2, 1300, 3, 1, 11};
+  t.warnings = {{"yarns came closer than half the contact distance", 4}};
+  t.objects = {{"ball", {0.0123, 456.25}}, {"floor", {0, 0}}};
+  f.run = t;
+  write_state_file(path, f);
+  const StateFile g = read_state_file(path);
+  ASSERT_TRUE(g.run.has_value());
+  EXPECT_EQ(to_json(*g.run), to_json(t));
+  EXPECT_EQ(g.run->min_contact_distance, t.min_contact_distance);  // bit for bit
+  EXPECT_EQ(g.run->reuse_scale_sum, t.reuse_scale_sum);
+  EXPECT_EQ(g.run->halving.calm, 11);
+  EXPECT_EQ(g.run->objects.at("ball").contact_points_sum, 456.25);
+  EXPECT_EQ(g.state.q, f.state.q);
+  // fields missing, of the wrong type or out of range
+  auto refused = [](nlohmann::json j, const std::string& key) {
+    try {
+      run_totals_from_json(j);
+      ADD_FAILURE() << "accepted a bad " << key << ": " << j.dump();
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("run." + key), std::string::npos) << e.what();
+    }
+  };
+  const nlohmann::json good = to_json(t);
+  nlohmann::json bad = good;
+  bad.erase("steps");
+  refused(bad, "steps");
+  bad = good;
+  bad["steps"] = -1;
+  refused(bad, "steps");
+  bad = good;
+  bad["contact_pairs_sum"] = nullptr;  // only the closest approach may be unset
+  refused(bad, "contact_pairs_sum");
+  bad = good;
+  bad["objects"]["ball"]["deepest_penetration_cm"] = "deep";
+  refused(bad, "objects[\"ball\"].deepest_penetration_cm");
+  bad = good;
+  bad["halving_level"] = 1e10;
+  refused(bad, "halving_level");
 }
 
 // files written before the knit block existed (version 1) are still read

@@ -359,14 +359,34 @@ std::vector<fs::path> sorted_frames(const fs::path& dir) {
   return frames;
 }
 
-// The pulls in `whole` and `dir` end in the same state, bit for bit, with the same curve.
-void expect_same_end(const fs::path& whole, const fs::path& dir) {
+// The pulls in `whole` and `dir` end in the same state, bit for bit (with the same run
+// totals), with the same curve and the same summary but for its wall-clock figures and
+// the state it resumed from (and, `frames_differ`, the frames written: the run in `dir` went
+// on without).
+void expect_same_end(const fs::path& whole, const fs::path& dir, bool frames_differ = false) {
   const StateFile a = read_state_file((whole / "final.kstate").string());
   const StateFile b = read_state_file((dir / "final.kstate").string());
   EXPECT_EQ(a.state.time, b.state.time);
   EXPECT_TRUE(a.state.q == b.state.q);
   EXPECT_TRUE(a.state.v == b.state.v);
+  if (!frames_differ)
+    EXPECT_EQ(file_text((whole / "final.kstate").string()),
+              file_text((dir / "final.kstate").string()));
   EXPECT_EQ(file_text((whole / "stretch.csv").string()), file_text((dir / "stretch.csv").string()));
+  std::ifstream in_a(whole / "summary.json"), in_b(dir / "summary.json");
+  nlohmann::json sa = nlohmann::json::parse(in_a), sb = nlohmann::json::parse(in_b);
+  for (const char* k : {"wall_time_s", "wall_s_per_simulated_s", "us_per_segment_step",
+                        "stage_seconds", "checkpoints_written", "resumed_from"}) {
+    sa.erase(k);
+    sb.erase(k);
+  }
+  if (frames_differ) {
+    sa.erase("frames_written");
+    sb.erase("frames_written");
+  }
+  for (const auto& [k, v] : sa.items())
+    EXPECT_EQ(v, sb.value(k, nlohmann::json())) << k << ": resumed " << sb.value(k, nlohmann::json());
+  for (const auto& [k, v] : sb.items()) EXPECT_TRUE(sa.contains(k)) << "only the resumed run has " << k;
 }
 
 // A pull killed partway (its frames after the third gone, no summary, no final state) and
@@ -477,7 +497,7 @@ TEST(Stretch, APullWithoutFramesGoesOnFromItsCheckpoint) {
   again.resume = killed.string();
   const StretchResult resumed = stretch_knit(relaxed_sample(), again);
   ASSERT_EQ(resumed.report.summary["status"], "ok") << resumed.report.summary.dump(2);
-  expect_same_end(o.out_dir, killed);
+  expect_same_end(o.out_dir, killed, true);
 
   // a checkpoint whose time has no sample in stretch.csv is not taken
   fs::remove_all(killed);

@@ -3,9 +3,13 @@
 // short step reaches; where even h/2ⁿ fails the run stops and says how far it halved.
 #include <gtest/gtest.h>
 
+#include <csignal>
 #include <cmath>
+#include <filesystem>
 
 #include "knit/constraints/projection.hpp"
+#include "knit/io/state_file.hpp"
+#include "knit/solver/interrupt.hpp"
 #include "knit/solver/runner.hpp"
 #include "knit/solver/step_halving.hpp"
 #include "yarn_setups.hpp"
@@ -95,6 +99,71 @@ TEST(StepHalving, WhereEvenTheHalvedStepFailsTheRunSaysSo) {
   EXPECT_GE(h["retried"].get<long long>(), 1) << h.dump();
   EXPECT_EQ(h["deepest"].get<int>(), 1) << h.dump();
   EXPECT_EQ(r.summary["params"]["solver"]["max_step_halvings"].get<int>(), 1);
+}
+
+// A run interrupted while its step was halved goes on at that halving when resumed in its
+// directory (the state's run totals say where the stepper stood): it ends as the
+// uninterrupted run, its state, totals and summary's halvings alike.
+TEST(StepHalving, ARunResumedWhileHalvedGoesOnAtItsHalvedStep) {
+  namespace fs = std::filesystem;
+  auto options = [](const std::string& dir) {
+    RunOptions o;
+    o.end_time = 0.08;
+    o.output_every = 10;
+    o.progress = false;
+    o.halving_calm_steps = 50;  // halved for a while, then doubled again
+    o.out_dir = dir;
+    return o;
+  };
+  auto model = [] {
+    State s;
+    Model m = stretched_yarn(s, 4);
+    m.params.solver.time_step = LONG_STEP;
+    return std::pair{std::move(m), s};
+  };
+  const std::string whole = ::testing::TempDir() + "/halving_whole",
+                    cut = ::testing::TempDir() + "/halving_cut";
+  fs::remove_all(whole);
+  fs::remove_all(cut);
+  auto [m, s] = model();
+  Simulator sim(m);
+  const RunReport a = run_simulation(sim, s, options(whole));
+  ASSERT_EQ(a.status, StepStatus::OK) << a.message;
+  ASSERT_GT(a.summary["step_halvings"]["retried"].get<long long>(), 0);
+
+  // interrupted one step after its output at step 20, between two output steps
+  {
+    auto [m2, s2] = model();
+    Simulator sim2(m2);
+    InterruptHandler handler;
+    RunOptions o = options(cut);
+    int outputs = 0;
+    o.on_output = [&](const StepData&, const State&) {
+      if (++outputs == 3) request_interrupt(SIGINT);
+    };
+    const RunReport r = run_simulation(sim2, s2, o);
+    clear_interrupt();
+    ASSERT_EQ(r.status, StepStatus::INTERRUPTED);
+  }
+  StateFile f = read_state_file(cut + "/final.kstate");
+  ASSERT_TRUE(f.run.has_value());
+  ASSERT_GT(f.run->halving.level, 0) << "the test needs a run interrupted while halved";
+  EXPECT_NE(std::lround(f.state.time / LONG_STEP) % 10, 0) << "between two output steps";
+  auto [m3, unused] = model();
+  Simulator sim3(m3);
+  RunOptions o = options(cut);
+  o.continue_in_place = true;
+  o.resumed_totals = f.run;
+  const RunReport b = run_simulation(sim3, f.state, o);
+  ASSERT_EQ(b.status, StepStatus::OK) << b.message;
+  EXPECT_EQ(b.summary["step_halvings"], a.summary["step_halvings"]);
+  EXPECT_EQ(b.summary["steps"], a.summary["steps"]);
+  const StateFile x = read_state_file(whole + "/final.kstate"),
+                  y = read_state_file(cut + "/final.kstate");
+  EXPECT_TRUE(x.state.q == y.state.q) << "positions differ after the resume";
+  EXPECT_TRUE(x.state.v == y.state.v) << "velocities differ after the resume";
+  ASSERT_TRUE(x.run && y.run);
+  EXPECT_EQ(to_json(*x.run), to_json(*y.run));
 }
 
 }  // namespace

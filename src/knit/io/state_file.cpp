@@ -196,9 +196,10 @@ void write_state_file(const std::string& path, const StateFile& f) {
   std::string out;
   out.reserve(64 + 48 * ncp);
   out.append(MAGIC, 8);
-  put<uint32_t>(out, STATE_FILE_VERSION);
+  // (version 3 where the file has nothing of version 4's: earlier builds read it too)
+  put<uint32_t>(out, f.run ? STATE_FILE_VERSION : 3u);
   put<uint32_t>(out, static_cast<uint32_t>(f.yarn_cp_counts.size()));
-  put<uint32_t>(out, (f.stitch.empty() ? 0u : 1u) | (f.knit ? 2u : 0u));
+  put<uint32_t>(out, (f.stitch.empty() ? 0u : 1u) | (f.knit ? 2u : 0u) | (f.run ? 4u : 0u));
   put<double>(out, f.state.time);
   for (size_t y = 0; y < f.yarn_cp_counts.size(); ++y) {
     put<uint32_t>(out, static_cast<uint32_t>(f.yarn_cp_counts[y]));
@@ -241,6 +242,11 @@ void write_state_file(const std::string& path, const StateFile& f) {
       put<double>(out, g.close_time);
     }
   }
+  if (f.run) {
+    const std::string run = to_json(*f.run).dump();
+    put<uint32_t>(out, static_cast<uint32_t>(run.size()));
+    out.append(run);
+  }
   out.append(END_MAGIC, 4);
   put<uint32_t>(out, checksum(out));
   write_file_atomic(path, out);
@@ -266,7 +272,8 @@ StateFile read_state_file(const std::string& path) {
   }
   const auto nyarn = r.get<uint32_t>("yarn count");
   const auto flags = r.get<uint32_t>("flags");
-  if (flags > (version >= 2 ? 3u : 1u)) r.fail("unknown flags " + std::to_string(flags));
+  if (flags > (version >= 4 ? 7u : version >= 2 ? 3u : 1u))
+    r.fail("unknown flags " + std::to_string(flags));
   StateFile f;
   f.state.time = r.get<double>("time");
   if (!std::isfinite(f.state.time) || f.state.time < 0)
@@ -356,6 +363,17 @@ StateFile read_state_file(const std::string& path) {
       if (!glue.gap.allFinite() || std::isnan(glue.close_time) || glue.close_time < 0)
         r.fail("glue " + std::to_string(g) + " has a bad gap or close time");
       f.glues.push_back(glue);
+    }
+  }
+  if (flags & 4u) {
+    const auto n = r.get<uint32_t>("run totals size");
+    if (n > r.remaining()) r.fail("run totals size exceeds the file");
+    const size_t at = r.pos();
+    const nlohmann::json run = nlohmann::json::parse(r.bytes(n, "run totals"), nullptr, false);
+    try {
+      f.run = run_totals_from_json(run);
+    } catch (const std::exception& e) {
+      r.fail_at(at, std::string("bad run totals: ") + e.what());
     }
   }
   if (r.bytes(4, "end marker") != std::string_view(END_MAGIC, 4)) r.fail("bad end marker");

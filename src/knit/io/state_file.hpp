@@ -4,8 +4,8 @@
 // be rendered or exported without its scene. Versioned; written atomically.
 //
 // Layout (little-endian):
-//   "KNITSTAT" | u32 version (1 to 3) | u32 num_yarns | u32 flags | f64 time (s, >= 0)
-//     flags: bit 0 stitches, bit 1 knit (version 2 and later)
+//   "KNITSTAT" | u32 version (1 to 4) | u32 num_yarns | u32 flags | f64 time (s, >= 0)
+//     flags: bit 0 stitches, bit 1 knit (version 2 and later), bit 2 run (version 4)
 //   per yarn: u32 num_cp | f64 radius (cm)
 //   f64 q[3·num_cp] | f64 v[3·num_cp]
 //   if stitches: per segment i32 row, i32 col
@@ -17,15 +17,19 @@
 //            f64 rest_length[num_seg] (cm)
 //            u32 num_glues | per glue: i32 segment a, f64 t a, i32 segment b, f64 t b,
 //                                      f64 gap[3] (cm), f64 close_time (s)
+//   if run: u32 n | n bytes of JSON: what the run that wrote the state had added up from
+//           its start to it (RunTotals, run_totals.hpp), for a run resumed from it
 //   "KEND"
-//   u32 CRC-32 (zlib) of every byte before it (version 3)
+//   u32 CRC-32 (zlib) of every byte before it (version 3 and later)
+// A file without a run block is written as version 3, which earlier builds read too.
 // Versions 1 (no knit block) and 2 (no checksum) are still read. Positions, velocities
-// and the time must be finite; a version 3 file whose checksum does not match is refused.
+// and the time must be finite; a file whose checksum does not match is refused.
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "knit/io/run_totals.hpp"
 #include "knit/model/model.hpp"
 #include "knit/model/state.hpp"
 
@@ -40,13 +44,16 @@ struct StateFile {
   std::optional<KnitInfo> knit;
   std::vector<double> rest_length;  ///< per segment when `knit` is set (cm)
   std::vector<Glue> glues;          ///< when `knit` is set
+  /// The totals of the run that wrote the state, up to it (runner.hpp); absent for states
+  /// not written by a run (a generated knit's initial.kstate, files of earlier builds).
+  std::optional<RunTotals> run;
   int num_cp() const;
   int num_seg() const;
   /// Global index of the first control point of every yarn.
   std::vector<int> yarn_cp_begin() const;
 };
 
-inline constexpr unsigned STATE_FILE_VERSION = 3;
+inline constexpr unsigned STATE_FILE_VERSION = 4;
 
 /// A relaxation's settings as the knit block writes them (by field name; the integrator by
 /// its option name).

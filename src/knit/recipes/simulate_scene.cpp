@@ -34,6 +34,7 @@ RunOptions scene_run_options(const Scene& scene, const SimulateOptions& o) {
   run.duration = scene.duration;
   run.end_time = scene.duration;  // scenes start at t = 0; a resumed one goes on to the end
   run.continue_in_place = o.continue_in_place;
+  run.resumed_totals = o.resumed_totals;
   run.resume_command = o.resume_command;
   run.output_every = scene.output_every;
   run.out_dir = o.out_dir;

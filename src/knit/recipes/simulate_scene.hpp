@@ -6,6 +6,7 @@
 // term is one of the default terms), run for the scene's duration with its time step.
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -28,6 +29,8 @@ struct SimulateOptions {
   /// The scene's state was resumed from a state of the run in out_dir: go on there (see
   /// RunOptions::continue_in_place) instead of requiring an empty directory.
   bool continue_in_place = false;
+  /// The totals of the state resumed (RunOptions::resumed_totals).
+  std::optional<RunTotals> resumed_totals;
   std::string resume_command;  ///< written into the summary of an interrupted run
   nlohmann::json extra = nlohmann::json::object();  ///< merged into the summary
 };

@@ -2,11 +2,13 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <limits>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -157,23 +159,33 @@ nlohmann::json stretch_measures(const std::vector<StretchSample>& all, double to
   return m;
 }
 
+namespace {
+// a number as the shortest text that reads back as the same double: a pull resumed from
+// its directory reads its curve so far back from stretch.csv, and its summary's measures
+// (work, width change, edge curl) are then the uninterrupted pull's, bit for bit
+std::string csv_number(double v) {
+  char buf[32];
+  const auto res = std::to_chars(buf, buf + sizeof(buf), v);
+  return std::string(buf, res.ptr);
+}
+}  // namespace
+
 void write_stretch_csv(const std::vector<StretchSample>& curve, const std::string& path) {
-  std::ostringstream o;
-  o << "time_s,strain,force_fixed_dyn,force_moving_dyn,width_cm,potential_energy_erg,"
-       "kinetic_energy_erg,min_contact_distance,edge_curl,force_residual,equilibrium\n"
-    << std::setprecision(10);
+  std::string o =
+      "time_s,strain,force_fixed_dyn,force_moving_dyn,width_cm,potential_energy_erg,"
+      "kinetic_energy_erg,min_contact_distance,edge_curl,force_residual,equilibrium\n";
   for (const StretchSample& s : curve) {
-    o << s.time << "," << s.strain << "," << s.force_fixed << "," << s.force_moving << ","
-      << s.width << "," << s.potential_energy << "," << s.kinetic_energy << ","
-      << s.min_contact_distance << "," << s.edge_curl << ",";
-    o << (std::isfinite(s.force_residual) ? s.force_residual : -1.0) << ","
-      << (s.equilibrium ? 1 : 0) << "\n";
+    for (double v : {s.time, s.strain, s.force_fixed, s.force_moving, s.width,
+                     s.potential_energy, s.kinetic_energy, s.min_contact_distance, s.edge_curl,
+                     std::isfinite(s.force_residual) ? s.force_residual : -1.0})
+      o += csv_number(v) + ",";
+    o += s.equilibrium ? "1\n" : "0\n";
   }
-  write_file_atomic(path, o.str());
+  write_file_atomic(path, o);
 }
 
 namespace {
-// stretch.csv keeps ten significant digits
+// (stretch.csv's times read back exactly; written by earlier builds, to ten significant digits)
 bool same_time(double a, double b) {
   return std::abs(a - b) <= 1e-8 * std::max(1.0, std::abs(b));
 }
@@ -471,9 +483,10 @@ std::string stretch_label(const StateFile& file, StretchDirection direction) {
 namespace {
 
 // StretchOptions::resume: checks that the state and the curve so far belong to this pull,
-// puts the state into the scene and the curve into the result; returns the state's path
+// puts the state into the scene, the curve into the result and the run's totals so far
+// into `totals`; returns the state's path
 std::string resume_stretch(const StretchOptions& o, Scene& scene, bool held,
-                           StretchResult& result) {
+                           StretchResult& result, std::optional<RunTotals>& totals) {
   const std::string what = "--resume " + o.resume;
   if (held)
     throw std::invalid_argument(what +
@@ -493,7 +506,8 @@ std::string resume_stretch(const StretchOptions& o, Scene& scene, bool held,
   if (!resumes_in_place(path, o.out_dir))
     throw std::invalid_argument(what + ": not a state of the run in " + o.out_dir +
                                 " (its final.kstate or frames/)");
-  const State state = read_state_file(path).state;
+  StateFile file = read_state_file(path);
+  const State& state = file.state;
   if (state.q.size() != scene.state.q.size())
     throw std::invalid_argument(what + ": it holds " + std::to_string(state.q.size() / 3) +
                                 " control points, the knit pulled has " +
@@ -537,6 +551,7 @@ std::string resume_stretch(const StretchOptions& o, Scene& scene, bool held,
         ": resume with the run's own knit, --direction, --to, --speed and --cycles");
   scene.state = state;
   result.curve = std::move(curve);
+  totals = std::move(file.run);
   return path;
 }
 
@@ -630,7 +645,9 @@ StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions&
   scene.duration = static_cast<double>(steps) * h;
   scene.output_every = static_cast<int>(std::min<long long>(output_every, 1'000'000'000));
   const Clamp& moving = scene.model.clamps[1];
-  const std::string resumed_from = o.resume.empty() ? "" : resume_stretch(o, scene, held, result);
+  std::optional<RunTotals> resumed_totals;
+  const std::string resumed_from =
+      o.resume.empty() ? "" : resume_stretch(o, scene, held, result, resumed_totals);
   RunDirectory locked;  // until the last plot and render are written
   if (!o.out_dir.empty())
     locked = resumed_from.empty() ? prepare_run_directory(o.out_dir, o.overwrite)
@@ -685,6 +702,7 @@ StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions&
   so.progress = o.progress;
   so.write_frames = o.write_frames;
   so.continue_in_place = !resumed_from.empty();
+  so.resumed_totals = resumed_totals;
   so.resume_command = o.resume_command;
   RunOptions run = scene_run_options(scene, so);
   run.on_output = sample;

@@ -49,6 +49,7 @@ RunReport relax(Simulator& sim, State& state, const RelaxOptions& o, nlohmann::j
   run.write_frames = o.write_frames;
   run.checkpoint_every_s = o.checkpoint_every_s;
   run.continue_in_place = o.continue_in_place;
+  run.resumed_totals = o.resumed_totals;
   run.resume_command = o.resume_command;
   run.halving_calm_steps = o.halving_calm_steps;
   const bool residual_test = o.force_residual > 0;

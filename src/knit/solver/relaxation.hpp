@@ -10,6 +10,7 @@
 //    (filters/fire.hpp), whose kinetic energy drops to 0 at every restart.
 // Every check measures the force residual (log.csv's force_residual column) whichever
 // test decides.
+#include <optional>
 #include <string>
 
 #include "knit/solver/runner.hpp"
@@ -31,6 +32,8 @@ struct RelaxOptions {
   /// The run resumes from a state of the run in out_dir and goes on there (see
   /// RunOptions::continue_in_place).
   bool continue_in_place = false;
+  /// The totals of the state resumed (RunOptions::resumed_totals).
+  std::optional<RunTotals> resumed_totals;
   std::string resume_command;  ///< written into the summary of an interrupted run
   int halving_calm_steps = 0;  ///< RunOptions::halving_calm_steps
   /// With contact reuse (SolverSettings::contact_reuse ρ > 0): while the knit is far from

@@ -151,10 +151,12 @@ const char* knitsim_version() {
 namespace {
 
 // drops the rows of an existing log.csv whose time is after `time` (a run resumed from an
-// earlier state of the same directory goes on from there)
+// earlier state of the same directory goes on from there), and the row at `time` unless
+// `keep_at_time` (the state is at an output step: an older knitsim also wrote a row at an
+// interrupt between two, which the uninterrupted run does not have)
 // (returns false, touching nothing, when its header is not `expected`: an older version
 // wrote other columns)
-bool truncate_log_after(const std::filesystem::path& path, double time,
+bool truncate_log_after(const std::filesystem::path& path, double time, bool keep_at_time,
                         const std::string& expected) {
   std::ifstream in(path);
   if (!in) return false;
@@ -164,7 +166,8 @@ bool truncate_log_after(const std::filesystem::path& path, double time,
     if (header && line != expected) return false;
     if (!header) {
       const double t = std::strtod(line.c_str(), nullptr);
-      if (t > time * (1 + 1e-12) + 1e-15) break;
+      if (keep_at_time ? t > time * (1 + 1e-12) + 1e-15 : t >= time * (1 - 1e-12) - 1e-15)
+        break;
     }
     header = false;
     kept += line + "\n";
@@ -174,9 +177,75 @@ bool truncate_log_after(const std::filesystem::path& path, double time,
   return true;
 }
 
-// bytes of one frame file for this model (positions, velocities, stitches, knit block)
+// adds a step's records to the run's totals (`objects`: the totals of the model's objects,
+// in its order)
+void add_step(RunTotals& t, const std::vector<RunTotals::Object*>& objects, const StepData& data,
+              double step, double h) {
+  ++t.steps;
+  if (step != h) t.shortened_steps.push_back(step);
+  if (data.contact.present) {
+    ++t.contact_steps;
+    t.contact_pairs_sum += static_cast<double>(data.contact.point_pairs_in_contact);
+    t.min_contact_distance = std::min(t.min_contact_distance, data.contact.min_distance_ratio);
+    t.contact_linearised += data.contact.linearised;
+  }
+  t.matrix_kept += data.matrix_kept;
+  t.reuse_scale_sum += data.reuse_scale;
+  if (data.solve_iterations > 0) {
+    ++t.solve_steps;
+    t.solve_iterations += data.solve_iterations;
+    t.solve_iterations_max = std::max(t.solve_iterations_max, data.solve_iterations);
+    t.solve_residual_max = std::max(t.solve_residual_max, data.solve_residual);
+  }
+  for (size_t o = 0; o < data.objects.size() && o < objects.size(); ++o) {
+    objects[o]->deepest_penetration =
+        std::max(objects[o]->deepest_penetration, data.objects[o].deepest_penetration);
+    objects[o]->contact_points_sum += static_cast<double>(data.objects[o].points_in_contact);
+  }
+  for (const std::string& w : data.warnings) ++t.warnings[w.substr(0, w.find(" ("))];
+  if (data.friction.present) {
+    ++t.friction_steps;
+    t.friction_pairs += data.friction.pairs;
+    t.friction_stuck += data.friction.stuck;
+    t.friction_passes += data.friction.passes;
+    t.friction_passes_max = std::max(t.friction_passes_max, data.friction.passes);
+    t.friction_work += data.friction.work;
+  }
+}
+
+// The wall-clock figures of a run's earlier legs, as the summary they left in its
+// directory says (zero where it says nothing): they stay out of the state files, whose
+// bytes then depend on what the run computes alone.
+struct WallFigures {
+  double wall_s = 0;
+  std::map<std::string, double> stage_seconds;
+  long long checkpoints = 0;
+};
+
+WallFigures read_wall_figures(const std::filesystem::path& summary) {
+  WallFigures w;
+  std::ifstream in(summary);
+  if (!in) return w;
+  const nlohmann::json s = nlohmann::json::parse(in, nullptr, false);
+  if (!s.is_object()) return w;
+  auto seconds = [](const nlohmann::json& v) {
+    return v.is_number() && std::isfinite(v.get<double>()) && v.get<double>() >= 0
+               ? v.get<double>()
+               : 0.0;
+  };
+  if (s.contains("wall_time_s")) w.wall_s = seconds(s["wall_time_s"]);
+  if (s.contains("stage_seconds") && s["stage_seconds"].is_object())
+    for (const auto& [name, sec] : s["stage_seconds"].items()) w.stage_seconds[name] = seconds(sec);
+  if (s.contains("checkpoints_written") && s["checkpoints_written"].is_number_integer())
+    w.checkpoints = std::max(0LL, s["checkpoints_written"].get<long long>());
+  return w;
+}
+
+// bytes of one frame file for this model (positions, velocities, stitches, knit block, the
+// run's totals)
 double frame_bytes(const Model& model) {
   double b = 64 + 12.0 * model.yarns.size() + 48.0 * model.num_cp();
+  b += 1024 + 128.0 * model.objects.size();  // (the totals: about 700 bytes of JSON)
   if (model.has_stitches()) b += 8.0 * model.num_seg();
   // (the knit's description, with its relaxation's settings, is about 550 bytes of JSON)
   if (model.knit)
@@ -253,7 +322,7 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
     throw std::invalid_argument("checkpoint_every_s = " + short_number(opt.checkpoint_every_s) +
                                 " (expected wall seconds >= 0; 0: no checkpoints)");
   const bool by_end_time = std::isfinite(opt.end_time);
-  const double end_time = by_end_time ? opt.end_time : state.time + opt.duration;
+  double end_time = by_end_time ? opt.end_time : state.time + opt.duration;
   if (by_end_time) {
     if (!(opt.end_time > state.time - 1e-6 * h))
       throw std::invalid_argument(
@@ -263,6 +332,10 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
   } else {
     check_duration(opt.duration, h);
   }
+  // the end the run was going to, where a resumed run asks for it (give or take rounding)
+  const bool resumed_totals = opt.continue_in_place && opt.resumed_totals.has_value();
+  if (resumed_totals && std::abs(opt.resumed_totals->end_time - end_time) <= 1e-6 * h)
+    end_time = opt.resumed_totals->end_time;
   const long long first_step = std::llround(state.time / h);  // global step index
   const long long total_steps =
       static_cast<long long>(std::ceil((end_time - state.time) / h - 1e-6));
@@ -300,7 +373,8 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
   if (write) {
     bool appending = false;
     if (opt.continue_in_place && fs::exists(dir / "log.csv")) {
-      appending = truncate_log_after(dir / "log.csv", state.time, log_header(sim));
+      appending = truncate_log_after(dir / "log.csv", state.time,
+                                     first_step % opt.output_every == 0, log_header(sim));
       // a log of other columns (an older knitsim) is kept whole beside the new one
       if (!appending) {
         claim_run_output((dir / "log_before_resume.csv").string());
@@ -320,34 +394,27 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
 
   RunReport report;
   const auto t0 = Clock::now();
-  const double start_time = state.time;
   auto last_progress = t0;
   auto last_output = t0;
-  long long last_output_step = 0;
-  long long step_index = first_step;
-  int frames_written = 0;
   auto last_checkpoint = t0;
-  int checkpoints = 0;
-  double contact_pairs_sum = 0;
-  long long contact_samples = 0;
-  // the IMEX_CONTACT step's conjugate-gradient solves
-  long long solve_steps = 0, solve_iterations = 0, contact_linearised = 0, matrix_kept = 0;
-  double reuse_scale_sum = 0;
-  int solve_iterations_max = 0;
-  double solve_residual_max = 0;
-  double min_d = std::numeric_limits<double>::infinity();
-  std::map<std::string, long long> warnings;
-  // yarn–yarn friction over the run: pairs and stuck pairs summed over steps, energy
-  // dissipated, sweeps
-  struct {
-    long long steps = 0, pairs = 0, stuck = 0, passes = 0;
-    int passes_max = 0;
-    double work = 0;
-  } friction;
-  // per object: deepest penetration over the run (cm) and the mean of its contact points
-  std::vector<double> object_deepest(model.objects.size(), 0.0),
-      object_points(model.objects.size(), 0.0);
-  std::vector<double> short_steps;
+  // what the run adds up: from the resumed state's totals when the run goes on in its
+  // directory (one run, however often stopped), else from nothing at this state
+  RunTotals totals;
+  totals.start_time = state.time;
+  if (resumed_totals) totals = *opt.resumed_totals;
+  totals.end_time = end_time;
+  // and the earlier legs' wall-clock figures, from the summary they left
+  const WallFigures earlier =
+      resumed_totals && write ? read_wall_figures(dir / "summary.json") : WallFigures{};
+  const double leg_start_time = state.time;
+  const long long leg_first_step = totals.steps;
+  long long last_output_steps = totals.steps;
+  long long step_index = first_step;
+  long long leg_checkpoints = 0;
+  std::vector<RunTotals::Object*> object_totals;  // per object of the model, in its order
+  for (const auto& object : model.objects) object_totals.push_back(&totals.objects[object->name]);
+  HalvingStepper stepper(model.params.solver.max_step_halvings, opt.halving_calm_steps,
+                         totals.halving);
   const bool tty = isatty(fileno(stderr));
   bool printed_progress = false;
 
@@ -361,16 +428,41 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
   // what every summary says of where the run stands (the end's and a checkpoint's)
   auto where_the_run_is = [&](nlohmann::json& j) {
     j["knitsim_version"] = knitsim_version();
-    j["steps"] = report.steps;
+    j["steps"] = totals.steps;
     j["time_step_s"] = h;
     j["end_time_s"] = end_time;
     j["sim_time_s"] = state.time;
+  };
+  // the wall-clock figures, summed over the run's legs (the end's summary and a
+  // checkpoint's: the next leg reads them back)
+  auto wall_figures = [&](nlohmann::json& j) {
+    const double wall = earlier.wall_s + seconds_since(t0);
+    j["wall_time_s"] = wall;
+    // wall seconds per simulated second (where the totals start: see totals_since_s)
+    if (state.time > totals.start_time)
+      j["wall_s_per_simulated_s"] = wall / (state.time - totals.start_time);
+    j["us_per_segment_step"] =
+        totals.steps > 0 ? 1e6 * wall / (static_cast<double>(totals.steps) * model.num_seg())
+                         : 0.0;
+    std::map<std::string, double> stages = earlier.stage_seconds;
+    for (const auto& [name, sec] : data.stage_seconds) stages[name] += sec;
+    j["stage_seconds"] = stages;
+    if (const long long n = earlier.checkpoints + leg_checkpoints; n > 0)
+      j["checkpoints_written"] = n;
+  };
+  // a state as the run writes it: with its totals up to the state
+  auto run_state_file = [&] {
+    StateFile f = make_state_file(model, state);
+    totals.halving = stepper.counts();
+    f.run = totals;
+    return f;
   };
   // a run without frames keeps its latest state on disk (RunOptions::checkpoint_every_s);
   // each file is replaced atomically, the state first: a kill between the two leaves the
   // previous checkpoint's summary, whose command then runs one interval past the end
   auto write_checkpoint = [&] {
-    write_state_file((dir / "final.kstate").string(), make_state_file(model, state));
+    write_state_file((dir / "final.kstate").string(), run_state_file());
+    ++leg_checkpoints;
     nlohmann::json c;
     c["status"] = "running";
     c["message"] = "a checkpoint at t = " + short_number(state.time) + " s, " +
@@ -379,51 +471,55 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
                    "stopped without writing its end; it goes on from final.kstate";
     if (!opt.resume_command.empty()) c["resume_command"] = resume_command();
     where_the_run_is(c);
-    c["wall_time_s"] = seconds_since(t0);
+    wall_figures(c);
     for (const auto& [key, value] : opt.extra.items()) c[key] = value;
     write_file_atomic((dir / "summary.json").string(), c.dump(2) + "\n");
     last_checkpoint = Clock::now();
-    ++checkpoints;
   };
 
-  auto write_output = [&](bool frame) {
+  // at an output step: the measurements, the log row and (when `frame`) a frame; at an
+  // interrupt between two output steps the measurements alone (its state goes into
+  // final.kstate), so that the log has the rows of the uninterrupted run
+  auto write_output = [&](bool output_step) {
     sim.forward(state);  // whole records (the steps' own are lean: below)
     if (opt.before_output) opt.before_output(sim, state);
-    const double wall = seconds_since(last_output);
-    const long long dsteps = report.steps - last_output_step;
-    if (write) {
-      log << state.time << "," << data.kinetic_energy << "," << data.potential_energy << ","
-          << data.max_violation << ","
-          << (data.contact.present ? data.contact.point_pairs_in_contact : 0) << ","
-          << (data.contact.present && std::isfinite(data.contact.min_distance_ratio)
-                  ? data.contact.min_distance_ratio
-                  : -1)
-          << "," << (dsteps > 0 ? wall / dsteps : 0.0) << ","
-          << (std::isfinite(data.force_residual) ? data.force_residual : -1);
-      for (const TermRecord& t : data.terms) log << "," << t.energy;
-      for (const auto& group : model.constraint_groups) {
-        if (group->kind() == "length") continue;
-        const ConstraintRecord* c = data.constraint(group->name());
-        const Eigen::Vector3d f = c ? c->force : Eigen::Vector3d::Zero();
-        log << "," << f[0] << "," << f[1] << "," << f[2];
+    if (output_step) {
+      if (write) {
+        const double wall = seconds_since(last_output);
+        const long long dsteps = totals.steps - last_output_steps;
+        log << state.time << "," << data.kinetic_energy << "," << data.potential_energy << ","
+            << data.max_violation << ","
+            << (data.contact.present ? data.contact.point_pairs_in_contact : 0) << ","
+            << (data.contact.present && std::isfinite(data.contact.min_distance_ratio)
+                    ? data.contact.min_distance_ratio
+                    : -1)
+            << "," << (dsteps > 0 ? wall / static_cast<double>(dsteps) : 0.0) << ","
+            << (std::isfinite(data.force_residual) ? data.force_residual : -1);
+        for (const TermRecord& t : data.terms) log << "," << t.energy;
+        for (const auto& group : model.constraint_groups) {
+          if (group->kind() == "length") continue;
+          const ConstraintRecord* c = data.constraint(group->name());
+          const Eigen::Vector3d f = c ? c->force : Eigen::Vector3d::Zero();
+          log << "," << f[0] << "," << f[1] << "," << f[2];
+        }
+        for (size_t o = 0; o < model.objects.size(); ++o) {
+          const ObjectRecord rec = o < data.objects.size() ? data.objects[o] : ObjectRecord{};
+          log << "," << rec.points_in_contact << "," << rec.deepest_penetration << ","
+              << rec.force[0] << "," << rec.force[1] << "," << rec.force[2];
+        }
+        log << "\n" << std::flush;
+        if (opt.write_frames) {
+          // frames are numbered by the global step (a resumed run goes on with the numbers);
+          // a last state between two output steps takes the next number
+          const long long index = (step_index + opt.output_every - 1) / opt.output_every;
+          ++totals.frames_written;  // (counted in the frame's own totals)
+          write_state_file((dir / "frames" / frame_name(static_cast<int>(index))).string(),
+                           run_state_file());
+        }
       }
-      for (size_t o = 0; o < model.objects.size(); ++o) {
-        const ObjectRecord rec = o < data.objects.size() ? data.objects[o] : ObjectRecord{};
-        log << "," << rec.points_in_contact << "," << rec.deepest_penetration << "," << rec.force[0]
-            << "," << rec.force[1] << "," << rec.force[2];
-      }
-      log << "\n" << std::flush;
-      if (opt.write_frames && frame) {
-        // frames are numbered by the global step (a resumed run goes on with the numbers);
-        // a last state between two output steps takes the next number
-        const long long index = (step_index + opt.output_every - 1) / opt.output_every;
-        write_state_file((dir / "frames" / frame_name(static_cast<int>(index))).string(),
-                         make_state_file(model, state));
-        ++frames_written;
-      }
+      last_output = Clock::now();
+      last_output_steps = totals.steps;
     }
-    last_output = Clock::now();
-    last_output_step = report.steps;
     if (opt.on_output) opt.on_output(data, state);
   };
 
@@ -445,7 +541,6 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
   }
   bool stopped_early = false;
   int signal = 0;
-  HalvingStepper stepper(model.params.solver.max_step_halvings, opt.halving_calm_steps);
   // the loop reads whole records at its outputs alone: the steps may leave out what only
   // records read (Simulator::set_lean_records), as they were once the loop ends
   struct LeanRecords {
@@ -463,46 +558,19 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
       report.message = res.message;
       break;
     }
-    ++report.steps;
     ++step_index;
-    if (hs != h) short_steps.push_back(hs);
-    if (data.contact.present) {
-      contact_pairs_sum += static_cast<double>(data.contact.point_pairs_in_contact);
-      ++contact_samples;
-      min_d = std::min(min_d, data.contact.min_distance_ratio);
-      contact_linearised += data.contact.linearised;
-    }
-    matrix_kept += data.matrix_kept;
-    reuse_scale_sum += data.reuse_scale;
-    if (data.solve_iterations > 0) {
-      ++solve_steps;
-      solve_iterations += data.solve_iterations;
-      solve_iterations_max = std::max(solve_iterations_max, data.solve_iterations);
-      solve_residual_max = std::max(solve_residual_max, data.solve_residual);
-    }
-    for (size_t o = 0; o < data.objects.size() && o < object_deepest.size(); ++o) {
-      object_deepest[o] = std::max(object_deepest[o], data.objects[o].deepest_penetration);
-      object_points[o] += static_cast<double>(data.objects[o].points_in_contact);
-    }
-    for (const std::string& w : data.warnings) ++warnings[w.substr(0, w.find(" ("))];
-    if (data.friction.present) {
-      ++friction.steps;
-      friction.pairs += data.friction.pairs;
-      friction.stuck += data.friction.stuck;
-      friction.passes += data.friction.passes;
-      friction.passes_max = std::max(friction.passes_max, data.friction.passes);
-      friction.work += data.friction.work;
-    }
+    add_step(totals, object_totals, data, hs, h);
     signal = interrupt_signal();
     const bool last = next_step_length(state.time, end_time, h) == 0;
-    if (step_index % opt.output_every == 0 || last || signal != 0) {
-      write_output(step_index % opt.output_every == 0 || last);
-      if (opt.stop_when && opt.stop_when(data, state)) {
+    const bool output_step = step_index % opt.output_every == 0 || last;
+    if (output_step || signal != 0) {
+      write_output(output_step);
+      if (output_step && opt.stop_when && opt.stop_when(data, state)) {
         stopped_early = true;
         break;
       }
-      if (write && !opt.write_frames && opt.checkpoint_every_s > 0 && !last && signal == 0 &&
-          seconds_since(last_checkpoint) >= opt.checkpoint_every_s)
+      if (output_step && write && !opt.write_frames && opt.checkpoint_every_s > 0 && !last &&
+          signal == 0 && seconds_since(last_checkpoint) >= opt.checkpoint_every_s)
         write_checkpoint();
     }
     if (signal != 0) {
@@ -514,9 +582,10 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
     if (opt.progress && seconds_since(last_progress) > (tty ? 0.5 : 15.0) &&
         seconds_since(t0) > 2.0) {
       const double elapsed = seconds_since(t0);
-      const double rate = report.steps / elapsed;
-      const double left = (total_steps - report.steps) / std::max(rate, 1e-9);
-      std::cerr << (tty ? "\r" : "") << "step " << report.steps << "/" << total_steps
+      const long long leg_steps = totals.steps - leg_first_step;
+      const double rate = static_cast<double>(leg_steps) / elapsed;
+      const double left = static_cast<double>(total_steps - leg_steps) / std::max(rate, 1e-9);
+      std::cerr << (tty ? "\r" : "") << "step " << leg_steps << "/" << total_steps
                 << "  t = " << std::fixed << std::setprecision(4) << data.time << " s  "
                 << std::setprecision(1) << rate << " steps/s  ~" << format_duration(left)
                 << " left   " << (tty ? "" : "\n") << std::flush;
@@ -526,14 +595,14 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
     }
   }
   if (printed_progress && tty) std::cerr << "\n";
-  const double wall = seconds_since(t0);
   const bool failed = report.status != StepStatus::OK && report.status != StepStatus::INTERRUPTED;
+  report.steps = totals.steps;
 
   // outputs: the final (or last good) state, the log and the summary
   if (write) {
-    write_state_file((dir / "final.kstate").string(), make_state_file(model, state));
+    write_state_file((dir / "final.kstate").string(), run_state_file());
     if (failed)
-      write_state_file((dir / "last_good.kstate").string(), make_state_file(model, state));
+      write_state_file((dir / "last_good.kstate").string(), run_state_file());
     else
       fs::remove(dir / "last_good.kstate");
     log.close();
@@ -547,9 +616,15 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
   if (report.status != StepStatus::OK && !opt.resume_command.empty())
     s["resume_command"] = resume_command();
   where_the_run_is(s);
+  if (opt.continue_in_place && !resumed_totals) {
+    s["totals_since_s"] = leg_start_time;
+    s["totals_note"] =
+        "resumed from a state written before states carried their run's totals: the steps, "
+        "extremes, means and counts cover the run from totals_since_s on";
+  }
   s["stopped_early"] = stopped_early;
-  if (!short_steps.empty()) {
-    s["shortened_steps_s"] = short_steps;
+  if (!totals.shortened_steps.empty()) {
+    s["shortened_steps_s"] = totals.shortened_steps;
     s["time_note"] =
         "the duration is not a multiple of the time step: the last steps were "
         "shortened to end at the time asked";
@@ -558,9 +633,7 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
     s["step_halvings"] = {{"retried", stepper.retried()},
                           {"deepest", stepper.deepest()},
                           {"substeps", stepper.substeps()}};
-  s["wall_time_s"] = wall;
-  // wall seconds per simulated second of this run (not counting what a resumed run did)
-  if (state.time > start_time) s["wall_s_per_simulated_s"] = wall / (state.time - start_time);
+  wall_figures(s);
   s["threads"] = std::min<size_t>(
       tbb::this_task_arena::max_concurrency(),
       tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
@@ -587,57 +660,54 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
   nlohmann::json energies = nlohmann::json::object();
   for (const TermRecord& t : data.terms) energies[t.name] = t.energy;
   s["energies"] = energies;
-  if (solve_steps > 0)
-    s["implicit_solve"] = {{"steps", solve_steps},
-                           {"iterations_mean", static_cast<double>(solve_iterations) / solve_steps},
-                           {"iterations_max", solve_iterations_max},
-                           {"relative_residual_max", solve_residual_max}};
-  if (contact_samples > 0) {
-    s["contact_pairs_mean"] = contact_pairs_sum / contact_samples;
-    s["min_contact_distance"] = finite_or_null(min_d);
+  const double steps = static_cast<double>(totals.steps);
+  if (totals.solve_steps > 0)
+    s["implicit_solve"] = {{"steps", totals.solve_steps},
+                           {"iterations_mean", static_cast<double>(totals.solve_iterations) /
+                                                   static_cast<double>(totals.solve_steps)},
+                           {"iterations_max", totals.solve_iterations_max},
+                           {"relative_residual_max", totals.solve_residual_max}};
+  if (totals.contact_steps > 0) {
+    const double n = static_cast<double>(totals.contact_steps);
+    s["contact_pairs_mean"] = totals.contact_pairs_sum / n;
+    s["min_contact_distance"] = finite_or_null(totals.min_contact_distance);
     if (model.params.solver.contact_reuse > 0)
-      s["contact_linearised_fraction"] = static_cast<double>(contact_linearised) / contact_samples;
+      s["contact_linearised_fraction"] = static_cast<double>(totals.contact_linearised) / n;
   }
-  if (model.params.solver.contact_reuse > 0 && report.steps > 0) {
-    s["matrix_kept_fraction"] = static_cast<double>(matrix_kept) / report.steps;
-    s["contact_reuse_scale_mean"] = reuse_scale_sum / static_cast<double>(report.steps);
+  if (model.params.solver.contact_reuse > 0 && totals.steps > 0) {
+    s["matrix_kept_fraction"] = static_cast<double>(totals.matrix_kept) / steps;
+    s["contact_reuse_scale_mean"] = totals.reuse_scale_sum / steps;
   }
   s["constraint_forces"] = constraint_forces_json(data);
-  if (friction.steps > 0) {
-    const double n = static_cast<double>(friction.steps);
+  if (totals.friction_steps > 0) {
+    const double n = static_cast<double>(totals.friction_steps);
+    const double pairs = static_cast<double>(totals.friction_pairs);
     s["yarn_friction"] = {
-        {"pairs_mean", friction.pairs / n},
-        {"stuck_fraction", friction.pairs > 0 ? static_cast<double>(friction.stuck) /
-                                                    static_cast<double>(friction.pairs)
-                                              : 0.0},
-        {"work_erg", friction.work},
-        {"passes_mean", friction.passes / n},
-        {"passes_max", friction.passes_max}};
+        {"pairs_mean", pairs / n},
+        {"stuck_fraction", pairs > 0 ? static_cast<double>(totals.friction_stuck) / pairs : 0.0},
+        {"work_erg", totals.friction_work},
+        {"passes_mean", static_cast<double>(totals.friction_passes) / n},
+        {"passes_max", totals.friction_passes_max}};
   }
   if (!model.objects.empty()) {
     nlohmann::json objects = nlohmann::json::object();
     for (size_t o = 0; o < model.objects.size(); ++o) {
       const ObjectRecord rec = o < data.objects.size() ? data.objects[o] : ObjectRecord{};
       objects[model.objects[o]->name] = {
-          {"max_penetration_cm", object_deepest[o]},
-          {"contact_points_mean", report.steps > 0 ? object_points[o] / report.steps : 0.0},
+          {"max_penetration_cm", object_totals[o]->deepest_penetration},
+          {"contact_points_mean",
+           totals.steps > 0 ? object_totals[o]->contact_points_sum / steps : 0.0},
           {"contact_points", rec.points_in_contact},
           {"force_dyn", vec_json(rec.force)}};
     }
     s["objects"] = objects;
   }
-  nlohmann::json stages = nlohmann::json::object();
-  for (const auto& [name, sec] : data.stage_seconds) stages[name] = sec;
-  s["stage_seconds"] = stages;
-  if (!warnings.empty()) {
+  if (!totals.warnings.empty()) {
     nlohmann::json w = nlohmann::json::object();
-    for (const auto& [text, count] : warnings) w[text] = count;
+    for (const auto& [text, count] : totals.warnings) w[text] = count;
     s["warnings"] = w;  // steps with each warning
   }
-  s["us_per_segment_step"] =
-      report.steps > 0 ? 1e6 * wall / (static_cast<double>(report.steps) * model.num_seg()) : 0.0;
-  s["frames_written"] = frames_written;
-  if (checkpoints > 0) s["checkpoints_written"] = checkpoints;
+  s["frames_written"] = totals.frames_written;
   s["params"] = params_json(model.params);
   for (const auto& [key, value] : opt.extra.items()) s[key] = value;
   if (opt.on_finish) opt.on_finish(sim, state, s);

@@ -12,11 +12,24 @@
 // Everything the log, summary and progress line say is read from the simulator's
 // StepData; the runner evaluates nothing itself. The time step is the model's
 // (params.solver.time_step).
+//
+// A run stopped (interrupted, killed after a checkpoint, or failed) and resumed in its
+// own directory is one run: every state the runner writes carries what the run has added
+// up so far (RunTotals, the state file's run block), a resumed run starts from the totals
+// of its state, and the summary is computed from the totals alone. So the summary of a
+// run resumed any number of times is the uninterrupted run's (its steps, extremes, means
+// and counts), but for the wall-clock figures (wall_time_s, stage_seconds,
+// checkpoints_written and what is computed from them), which are sums over the legs (the
+// earlier legs' read from the summary they left), and the leg's own provenance
+// (resumed_from, the command line); and its log.csv has the uninterrupted run's rows (an
+// interrupt writes none between two output steps).
 #include <functional>
 #include <limits>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 
+#include "knit/io/run_totals.hpp"
 #include "knit/solver/simulator.hpp"
 
 namespace knit {
@@ -31,6 +44,12 @@ struct RunOptions {
   /// Go on with the run already in out_dir (resumed from one of its states): log.csv is
   /// appended to (its rows after the start time dropped), frames keep their numbering.
   bool continue_in_place = false;
+  /// With continue_in_place: the totals of the state the run resumes from (StateFile::
+  /// run), from which the run's totals go on. Absent (a state written before states
+  /// carried them), the summary covers the run from the resumed state on and says so
+  /// ("totals_since_s"). Ignored without continue_in_place: a run from another
+  /// directory's state is a run of its own.
+  std::optional<RunTotals> resumed_totals;
   /// The command that resumes this run from DIR/final.kstate, written into the summary
   /// of an interrupted or failed run ("" : none).
   std::string resume_command;
@@ -62,7 +81,7 @@ struct RunOptions {
 struct RunReport {
   StepStatus status = StepStatus::OK;
   std::string message;
-  long long steps = 0;
+  long long steps = 0;  ///< of the run (a resumed run's earlier legs included)
   nlohmann::json summary;
 };
 
@@ -74,7 +93,9 @@ struct RunReport {
 /// the time asked, and the summary says so. While an InterruptHandler is installed
 /// (interrupt.hpp), a SIGINT/SIGTERM ends the run after the current step with status
 /// INTERRUPTED: the state is in DIR/final.kstate and the summary holds the command to
-/// resume.
+/// resume. An interrupt between two output steps writes no log row or frame (the state is
+/// in final.kstate) and does not ask stop_when, so that the resumed run goes on as the
+/// uninterrupted one.
 RunReport run_simulation(Simulator& sim, State& state, const RunOptions& options);
 
 /// Evaluates the forces at `state` and throws std::invalid_argument when yarns start

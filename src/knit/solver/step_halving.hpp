@@ -16,8 +16,10 @@
 // its stability limit grows an oscillation for a few steps before it fails; in a
 // simulation that is energy the filters and damping then remove, in a relaxation (FIRE)
 // it is an uphill step FIRE stops. The summary says how often it happened.
+#include <algorithm>
 #include <string>
 
+#include "knit/io/run_totals.hpp"
 #include "knit/solver/simulator.hpp"
 
 namespace knit {
@@ -25,31 +27,32 @@ namespace knit {
 class HalvingStepper {
  public:
   /// `max_halvings`: n; `calm_steps`: steps of h that pass at a halved step before the
-  /// step doubles again (0: never; the run goes on at the step it needed).
-  HalvingStepper(int max_halvings, int calm_steps)
-      : m_max(max_halvings), m_calm_steps(calm_steps) {}
+  /// step doubles again (0: never; the run goes on at the step it needed). `from`: where a
+  /// resumed run's stepper stood (RunTotals::halving), so that it goes on at that step.
+  HalvingStepper(int max_halvings, int calm_steps, const HalvingCounts& from = {})
+      : m_max(max_halvings), m_calm_steps(calm_steps), m_counts(from) {
+    m_counts.level = std::min(m_counts.level, max_halvings);  // (a resume with fewer allowed)
+  }
 
   /// Advances `state` by h (as Simulator::step, in 2ᵏ substeps): on failure the state is
   /// the last good substep's and the message says how far the step was halved.
   StepResult step(Simulator& sim, State& state, double h);
 
+  /// Its counts and where it stands (those of the run it was resumed from included).
+  const HalvingCounts& counts() const { return m_counts; }
   /// Substeps thrown away and taken again in halves.
-  long long retried() const { return m_retried; }
+  long long retried() const { return m_counts.retried; }
   /// The most halvings any step needed.
-  int deepest() const { return m_deepest; }
+  int deepest() const { return m_counts.deepest; }
   /// Substeps taken, over all steps (equal to the steps when none was halved).
-  long long substeps() const { return m_substeps; }
+  long long substeps() const { return m_counts.substeps; }
   /// The halvings the next step starts with.
-  int level() const { return m_level; }
+  int level() const { return m_counts.level; }
 
  private:
   int m_max;
   int m_calm_steps;
-  int m_level = 0;
-  int m_calm = 0;
-  int m_deepest = 0;
-  long long m_retried = 0;
-  long long m_substeps = 0;
+  HalvingCounts m_counts;
 };
 
 }  // namespace knit
