@@ -28,9 +28,11 @@ namespace fs = std::filesystem;
 using knit::cli_test::Result;
 using knit::cli_test::run;
 
+// null where the file is not there yet (a run's first summary comes after its first log rows)
 nlohmann::json read_json(const std::string& path) {
   std::ifstream in(path);
-  return nlohmann::json::parse(in);
+  nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
+  return j.is_discarded() ? nlohmann::json() : j;
 }
 
 std::string read_bytes(const std::string& path) {
@@ -100,7 +102,8 @@ nlohmann::json interrupt(const std::string& args, const std::string& dir, int si
   kill(pid, sig);
   const int exit_code = wait_exit(pid);
   nlohmann::json s = read_json(dir + "/summary.json");
-  if (s["status"] == "ok") return nullptr;  // (the signal came as it was ending)
+  EXPECT_TRUE(s.is_object()) << dir << "/summary.json: missing or unreadable after the signal";
+  if (!s.is_object() || s["status"] == "ok") return nullptr;  // (the signal came as it was ending)
   EXPECT_EQ(exit_code, 128 + sig) << args;
   EXPECT_EQ(s["status"], "interrupted") << s.dump(2);
   return s;
@@ -122,7 +125,7 @@ nlohmann::json kill_after_checkpoint(const std::string& args, const std::string&
     kill(pid, SIGSTOP);
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
     s = read_json(dir + "/summary.json");
-    if (s.value("status", "") == "running" && fs::exists(dir + "/final.kstate") &&
+    if (s.is_object() && s.value("status", "") == "running" && fs::exists(dir + "/final.kstate") &&
         knit::read_state_file(dir + "/final.kstate").state.time ==
             s["sim_time_s"].get<double>())
       break;

@@ -313,6 +313,14 @@ void refuse_foreign(const std::string& what, const Survey& s) {
       " names): move the others away, or choose another directory");
 }
 
+[[noreturn]] void refuse_unmarked(const std::string& what, const std::vector<std::string>& names) {
+  throw std::invalid_argument(
+      "run directory " + what + " already holds files (" + some(names) +
+      ") and no knitsim run marker (" + RUN_MARKER +
+      "): they are not a knitsim run's (or are a run's from before markers), and knitsim "
+      "removes only files its runs wrote; move them away, or choose another directory");
+}
+
 // The checks every way in shares: a name, not a place knitsim must never write a run into.
 fs::path checked_path(const std::string& dir) {
   if (dir.empty())
@@ -364,11 +372,7 @@ RunDirectory open_run_directory(const std::string& dir, bool overwrite, bool con
   if (existed && !marked && mode == Mode::NEW_RUN) {
     const std::vector<std::string> names = top_level(real);
     if (!names.empty())
-      throw std::invalid_argument(
-          "run directory " + what + " already holds files (" + some(names) +
-          ") and no knitsim run marker (" + RUN_MARKER +
-          "): they are not a knitsim run's (or are a run's from before markers), and knitsim "
-          "removes only files its runs wrote; move them away, or choose another directory");
+      refuse_unmarked(what, names);
   }
   if (!existed) {
     fs::create_directories(real, ec);
@@ -448,11 +452,7 @@ void check_run_directory(const std::string& dir, bool overwrite) {
   if (!fs::exists(fs::symlink_status(marker, ec))) {
     const std::vector<std::string> names = top_level(real);
     if (!names.empty())
-      throw std::invalid_argument(
-          "run directory " + what + " already holds files (" + some(names) +
-          ") and no knitsim run marker (" + RUN_MARKER +
-          "): they are not a knitsim run's (or are a run's from before markers), and knitsim "
-          "removes only files its runs wrote; move them away, or choose another directory");
+      refuse_unmarked(what, names);
     return;
   }
   const int fd = ::open(marker.c_str(), O_RDONLY | O_CLOEXEC | O_NOFOLLOW);
