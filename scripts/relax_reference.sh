@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The long relaxations that quick ones are compared against (README: "The damped dynamic
+# The long relaxations that quick ones are compared against (docs/results.md: "The damped dynamic
 # relaxations kept as references"). For each pattern, the default damped relaxation of a
 # ROWS×COLS sample (damped dynamics, imex-contact at 6e-4 s with contact reuse 0.05) runs
 # REF_TIME simulated seconds from the generated yarn into OUT/PATTERN; it creeps and never

@@ -469,7 +469,8 @@ TEST(Cli, RunDirectoriesAreNeverMixed) {
   EXPECT_TRUE(fs::exists(out + "/frames/state_000001.kstate"));
   const Result relax = run("relax garter --rows 2 --cols 2 --max-time 0.001 --quiet --out " + out);
   EXPECT_EQ(relax.code, 1);
-  EXPECT_NE(relax.output.find("already holds an earlier run's files"), std::string::npos) << relax.output;
+  EXPECT_NE(relax.output.find("already holds an earlier run's files"), std::string::npos)
+      << relax.output;
   for (const char* bad : {"/", "~"}) {
     const Result r = run("simulate " + pendulum + " --duration 0.001 --overwrite --out " + bad);
     EXPECT_EQ(r.code, 1) << bad;

@@ -1,4 +1,4 @@
-// What knitsim promises a user whatever they give it (README "Guarantees"): bad input is
+// What knitsim promises a user whatever they give it (docs/guarantees.md): bad input is
 // refused before anything is written, with a message naming what is wrong; no run says
 // "ok" for something it did not do; a signal ends a run with its state and a summary it
 // can be resumed from, bit for bit; runs never mix in one directory.

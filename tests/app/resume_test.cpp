@@ -126,8 +126,7 @@ nlohmann::json kill_after_checkpoint(const std::string& args, const std::string&
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
     s = read_json(dir + "/summary.json");
     if (s.is_object() && s.value("status", "") == "running" && fs::exists(dir + "/final.kstate") &&
-        knit::read_state_file(dir + "/final.kstate").state.time ==
-            s["sim_time_s"].get<double>())
+        knit::read_state_file(dir + "/final.kstate").state.time == s["sim_time_s"].get<double>())
       break;
     kill(pid, SIGCONT);
     std::this_thread::sleep_for(std::chrono::milliseconds(3));
@@ -155,8 +154,8 @@ void expect_same_summary(const nlohmann::json& whole, const nlohmann::json& resu
     if (WALL_CLOCK.count(k) || LEG.count(k)) continue;
     ASSERT_TRUE(whole.contains(k)) << "only the resumed run's summary has " << k;
     ASSERT_TRUE(resumed.contains(k)) << "the resumed run's summary lacks " << k;
-    EXPECT_EQ(whole[k], resumed[k]) << k << ": uninterrupted " << whole[k].dump()
-                                    << ", resumed " << resumed[k].dump();
+    EXPECT_EQ(whole[k], resumed[k])
+        << k << ": uninterrupted " << whole[k].dump() << ", resumed " << resumed[k].dump();
   }
   for (const char* k : {"wall_time_s", "stage_seconds"}) EXPECT_TRUE(resumed.contains(k)) << k;
 }
@@ -316,8 +315,7 @@ TEST(Resume, ARelaxationInterruptedTwiceEndsAsTheUninterruptedOne) {
   ASSERT_EQ(stops, 2) << "the run ended before it was interrupted twice";
   const Result r = run(cmd);
   ASSERT_EQ(r.code, 0) << cmd << "\n" << r.output;
-  expect_same_run(dir + "/whole", cut, {"initial.kstate", "final.kstate", "relaxed.kstate"},
-                  wall);
+  expect_same_run(dir + "/whole", cut, {"initial.kstate", "final.kstate", "relaxed.kstate"}, wall);
 }
 
 // Without frames: killed outright after a checkpoint (the summary says "running"), resumed

@@ -59,8 +59,10 @@ TEST(RunDirCli, OverwriteNeverRemovesAUsersFiles) {
     EXPECT_NE(r.output.find("thesis.txt"), std::string::npos) << r.output;
     EXPECT_EQ(r.output.find("status ok"), std::string::npos) << r.output;
   }
-  const Result relax = run("relax garter --rows 2 --cols 2 --max-time 0.001 --quiet --overwrite "
-                           "--out " + (root / "mydocs").string());
+  const Result relax =
+      run("relax garter --rows 2 --cols 2 --max-time 0.001 --quiet --overwrite "
+          "--out " +
+          (root / "mydocs").string());
   EXPECT_EQ(relax.code, 1) << relax.output;
   EXPECT_EQ(read_text(root / "mydocs" / "thesis.txt"), "three years");
   EXPECT_TRUE(fs::exists(root / "mydocs" / "photos" / "a.jpg"));
@@ -75,9 +77,9 @@ TEST(RunDirCli, OverwriteNeverRemovesAUsersFiles) {
   EXPECT_TRUE(fs::exists(root / "run" / "summary.json"));
   fs::remove(root / "run" / "notes.txt");
   // and without it the overwrite goes through, the rendered sequence of it too
-  EXPECT_EQ(run("simulate " + PENDULUM + " --duration 0.01 --quiet --overwrite --out " + run_dir)
-                .code,
-            0);
+  EXPECT_EQ(
+      run("simulate " + PENDULUM + " --duration 0.01 --quiet --overwrite --out " + run_dir).code,
+      0);
   const std::string movie = (root / "movie").string();
   for (int k = 0; k < 2; ++k)
     EXPECT_EQ(run("render " + run_dir + "/frames --size 32x24 --overwrite --out " + movie).code, 0);
@@ -98,8 +100,8 @@ TEST(RunDirCli, ASecondRunIntoABusyDirectoryIsRefused) {
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   ASSERT_TRUE(seen) << "the first run never locked its directory";
   for (const char* flag : {"", " --overwrite"}) {
-    const Result r = run("simulate " + PENDULUM + " --duration 0.001 --quiet --out " +
-                         dir.string() + flag);
+    const Result r =
+        run("simulate " + PENDULUM + " --duration 0.001 --quiet --out " + dir.string() + flag);
     EXPECT_EQ(r.code, 1) << r.output;
     EXPECT_NE(r.output.find("is writing into it"), std::string::npos) << r.output;
     EXPECT_NE(r.output.find("process " + std::to_string(pid)), std::string::npos) << r.output;

@@ -186,8 +186,7 @@ TEST(RunDirectory, ARunDirectoryIsLockedWhileARunWritesIt) {
     const std::string r = refusal(dir.string(), overwrite);
     EXPECT_NE(r.find("is writing into it"), std::string::npos) << r;
   }
-  EXPECT_THROW(const RunDirectory d = continue_run_directory(dir.string()),
-               std::invalid_argument);
+  EXPECT_THROW(const RunDirectory d = continue_run_directory(dir.string()), std::invalid_argument);
   EXPECT_THROW(check_run_directory(dir.string(), true), std::invalid_argument);
   EXPECT_TRUE(fs::exists(dir / "summary.json")) << "a busy directory was touched";
   ::close(fd);

@@ -149,7 +149,7 @@ TEST(Stretch, YarnFrictionActsOnTheKnitsContacts) {
 }
 
 // imex-contact with yarn friction pulls another curve than the explicit step at the steps
-// it is for (README, Speed II): such a pull says so, in its summary; the others do not
+// it is for (docs/speed.md, Speed II): such a pull says so, in its summary; the others do not
 TEST(Stretch, APullKnownToMisleadSaysSoInItsSummary) {
   StretchOptions o;
   o.to_strain = 0.01;
@@ -385,8 +385,10 @@ void expect_same_end(const fs::path& whole, const fs::path& dir, bool frames_dif
     sb.erase("frames_written");
   }
   for (const auto& [k, v] : sa.items())
-    EXPECT_EQ(v, sb.value(k, nlohmann::json())) << k << ": resumed " << sb.value(k, nlohmann::json());
-  for (const auto& [k, v] : sb.items()) EXPECT_TRUE(sa.contains(k)) << "only the resumed run has " << k;
+    EXPECT_EQ(v, sb.value(k, nlohmann::json()))
+        << k << ": resumed " << sb.value(k, nlohmann::json());
+  for (const auto& [k, v] : sb.items())
+    EXPECT_TRUE(sa.contains(k)) << "only the resumed run has " << k;
 }
 
 // A pull killed partway (its frames after the third gone, no summary, no final state) and

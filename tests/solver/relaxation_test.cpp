@@ -162,7 +162,7 @@ EdgeRoll central_edge_roll(const Model& m, const Eigen::VectorXd& q, const Fabri
 // The paper's result (MODEL.md §6), in small: the same loop and parameters, differing only
 // in which stitches are knit or purl, relax into different shapes. Three swatches of 6 rows
 // × 8 stitches (two 2×2 rib repeats) relaxed by the relax_knit recipe with its defaults for
-// 0.1 s (1180 steps; the 42 × 32 samples of README "Results" ran 4 s). Measured (Release),
+// 0.1 s (1180 steps; the 42 × 32 samples of docs/results.md ran 4 s). Measured (Release),
 // generated → after 0.1 s:
 //   course length along the fabric: stockinette 8.015 → 7.898 cm, 2×2 rib 8.057 → 7.588
 //     (rib/stockinette 1.005 → 0.961);

@@ -3,8 +3,8 @@
 // short step reaches; where even h/2ⁿ fails the run stops and says how far it halved.
 #include <gtest/gtest.h>
 
-#include <csignal>
 #include <cmath>
+#include <csignal>
 #include <filesystem>
 
 #include "knit/constraints/projection.hpp"

@@ -26,9 +26,9 @@ namespace fs = std::filesystem;
 namespace detail {
 
 struct HeldRunDirectory {
-  fs::path dir;                    // canonical
-  int fd = -1;                     // the marker, open for appending, flock'd
-  std::set<std::string> claimed;   // relative paths, '/'-separated
+  fs::path dir;                   // canonical
+  int fd = -1;                    // the marker, open for appending, flock'd
+  std::set<std::string> claimed;  // relative paths, '/'-separated
   HeldRunDirectory() = default;
   HeldRunDirectory(const HeldRunDirectory&) = delete;
   HeldRunDirectory& operator=(const HeldRunDirectory&) = delete;
@@ -152,8 +152,8 @@ void write_line(int fd, const std::string& line) {
   while (done < l.size()) {
     const ssize_t n = ::write(fd, l.data() + done, l.size() - done);
     if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) throw std::runtime_error(std::string("cannot write the run marker: ") +
-                                         std::strerror(errno));
+    if (n <= 0)
+      throw std::runtime_error(std::string("cannot write the run marker: ") + std::strerror(errno));
     done += static_cast<size_t>(n);
   }
 }
@@ -348,7 +348,9 @@ enum class Mode { NEW_RUN, CONTINUE, CHECK };
 
 }  // namespace
 
-std::string RunDirectory::path() const { return held_ ? held_->dir.string() : std::string(); }
+std::string RunDirectory::path() const {
+  return held_ ? held_->dir.string() : std::string();
+}
 
 RunDirectory open_run_directory(const std::string& dir, bool overwrite, bool continuing) {
   const Mode mode = continuing ? Mode::CONTINUE : Mode::NEW_RUN;
@@ -371,8 +373,7 @@ RunDirectory open_run_directory(const std::string& dir, bool overwrite, bool con
                                 " is a symbolic link, not a knitsim run marker");
   if (existed && !marked && mode == Mode::NEW_RUN) {
     const std::vector<std::string> names = top_level(real);
-    if (!names.empty())
-      refuse_unmarked(what, names);
+    if (!names.empty()) refuse_unmarked(what, names);
   }
   if (!existed) {
     fs::create_directories(real, ec);
@@ -451,8 +452,7 @@ void check_run_directory(const std::string& dir, bool overwrite) {
   const fs::path marker = real / RUN_MARKER;
   if (!fs::exists(fs::symlink_status(marker, ec))) {
     const std::vector<std::string> names = top_level(real);
-    if (!names.empty())
-      refuse_unmarked(what, names);
+    if (!names.empty()) refuse_unmarked(what, names);
     return;
   }
   const int fd = ::open(marker.c_str(), O_RDONLY | O_CLOEXEC | O_NOFOLLOW);

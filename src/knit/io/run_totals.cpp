@@ -77,8 +77,7 @@ double read_double(const nlohmann::json& v, const std::string& key, bool null_is
 long long read_count(const nlohmann::json& v, const std::string& key, long long max) {
   if (!v.is_number_integer()) fail(key, "not an integer");
   const long long n = v.get<long long>();
-  if (n < 0 || n > max)
-    fail(key, std::to_string(n) + " is outside 0 to " + std::to_string(max));
+  if (n < 0 || n > max) fail(key, std::to_string(n) + " is outside 0 to " + std::to_string(max));
   return n;
 }
 

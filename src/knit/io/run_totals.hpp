@@ -32,7 +32,7 @@ struct RunTotals {
   /// s: the time the run is to end at. A resumed run asked to end there to within a
   /// millionth of a step ends exactly there (a command gives the time left in decimal).
   double end_time = 0;
-  long long steps = 0;    ///< steps taken (of h, or shortened to end at the time asked)
+  long long steps = 0;  ///< steps taken (of h, or shortened to end at the time asked)
   std::vector<double> shortened_steps;  ///< s: the steps that were not of h
   long long frames_written = 0;
   // yarn–yarn contact, over the steps that evaluated it

@@ -270,8 +270,9 @@ RelaxResult relax_knit(const std::string& pattern_name, const RelaxKnitOptions& 
   const std::string& out = o.run.out_dir;
   check_start(sim, result.state);
   RunDirectory held;  // locked until the relaxed state is beside the final one
-  if (!out.empty()) held = o.run.continue_in_place ? continue_run_directory(out)
-                                                   : prepare_run_directory(out, o.run.overwrite);
+  if (!out.empty())
+    held = o.run.continue_in_place ? continue_run_directory(out)
+                                   : prepare_run_directory(out, o.run.overwrite);
   if (!out.empty() && !o.run.continue_in_place) {
     write_state_file((fs::path(out) / "initial.kstate").string(),
                      make_state_file(model, result.state));
@@ -331,8 +332,9 @@ RelaxResult relax_yarns(const std::string& path, const RelaxYarnsOptions& o) {
   Simulator sim(model);
   check_start(sim, result.state);
   RunDirectory held;
-  if (!out.empty()) held = o.run.continue_in_place ? continue_run_directory(out)
-                                                   : prepare_run_directory(out, o.run.overwrite);
+  if (!out.empty())
+    held = o.run.continue_in_place ? continue_run_directory(out)
+                                   : prepare_run_directory(out, o.run.overwrite);
   if (!out.empty() && !o.run.continue_in_place) {
     write_state_file((fs::path(out) / "initial.kstate").string(),
                      make_state_file(model, result.state));

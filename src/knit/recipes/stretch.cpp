@@ -175,8 +175,8 @@ void write_stretch_csv(const std::vector<StretchSample>& curve, const std::strin
       "time_s,strain,force_fixed_dyn,force_moving_dyn,width_cm,potential_energy_erg,"
       "kinetic_energy_erg,min_contact_distance,edge_curl,force_residual,equilibrium\n";
   for (const StretchSample& s : curve) {
-    for (double v : {s.time, s.strain, s.force_fixed, s.force_moving, s.width,
-                     s.potential_energy, s.kinetic_energy, s.min_contact_distance, s.edge_curl,
+    for (double v : {s.time, s.strain, s.force_fixed, s.force_moving, s.width, s.potential_energy,
+                     s.kinetic_energy, s.min_contact_distance, s.edge_curl,
                      std::isfinite(s.force_residual) ? s.force_residual : -1.0})
       o += csv_number(v) + ",";
     o += s.equilibrium ? "1\n" : "0\n";
@@ -485,8 +485,8 @@ namespace {
 // StretchOptions::resume: checks that the state and the curve so far belong to this pull,
 // puts the state into the scene, the curve into the result and the run's totals so far
 // into `totals`; returns the state's path
-std::string resume_stretch(const StretchOptions& o, Scene& scene, bool held,
-                           StretchResult& result, std::optional<RunTotals>& totals) {
+std::string resume_stretch(const StretchOptions& o, Scene& scene, bool held, StretchResult& result,
+                           std::optional<RunTotals>& totals) {
   const std::string what = "--resume " + o.resume;
   if (held)
     throw std::invalid_argument(what +

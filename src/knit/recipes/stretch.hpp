@@ -33,10 +33,10 @@ Params stretch_params();
 
 struct StretchOptions {
   StretchDirection direction = StretchDirection::COURSE;
-  double to_strain = 1.0;       ///< nominal strain at the end of the pull (1: doubled length)
-  int cycles = 0;               ///< further half-cycles after the pull (back, out, …)
-  double speed = 5.0;           ///< the moving clamp's speed (cm/s)
-  int clamp_stitches = 2;       ///< columns, rows or corner size held by each clamp
+  double to_strain = 1.0;  ///< nominal strain at the end of the pull (1: doubled length)
+  int cycles = 0;          ///< further half-cycles after the pull (back, out, …)
+  double speed = 5.0;      ///< the moving clamp's speed (cm/s)
+  int clamp_stitches = 2;  ///< columns, rows or corner size held by each clamp
   /// a sample (and a written state) every this much strain (a pull to less is sampled at
   /// its start and end: sample_strain)
   double output_strain = 0.01;

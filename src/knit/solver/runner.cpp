@@ -166,8 +166,7 @@ bool truncate_log_after(const std::filesystem::path& path, double time, bool kee
     if (header && line != expected) return false;
     if (!header) {
       const double t = std::strtod(line.c_str(), nullptr);
-      if (keep_at_time ? t > time * (1 + 1e-12) + 1e-15 : t >= time * (1 - 1e-12) - 1e-15)
-        break;
+      if (keep_at_time ? t > time * (1 + 1e-12) + 1e-15 : t >= time * (1 - 1e-12) - 1e-15) break;
     }
     header = false;
     kept += line + "\n";
@@ -229,9 +228,8 @@ WallFigures read_wall_figures(const std::filesystem::path& summary) {
   const nlohmann::json s = nlohmann::json::parse(in, nullptr, false);
   if (!s.is_object()) return w;
   auto seconds = [](const nlohmann::json& v) {
-    return v.is_number() && std::isfinite(v.get<double>()) && v.get<double>() >= 0
-               ? v.get<double>()
-               : 0.0;
+    return v.is_number() && std::isfinite(v.get<double>()) && v.get<double>() >= 0 ? v.get<double>()
+                                                                                   : 0.0;
   };
   if (s.contains("wall_time_s")) w.wall_s = seconds(s["wall_time_s"]);
   if (s.contains("stage_seconds") && s["stage_seconds"].is_object())
@@ -442,8 +440,7 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
     if (state.time > totals.start_time)
       j["wall_s_per_simulated_s"] = wall / (state.time - totals.start_time);
     j["us_per_segment_step"] =
-        totals.steps > 0 ? 1e6 * wall / (static_cast<double>(totals.steps) * model.num_seg())
-                         : 0.0;
+        totals.steps > 0 ? 1e6 * wall / (static_cast<double>(totals.steps) * model.num_seg()) : 0.0;
     std::map<std::string, double> stages = earlier.stage_seconds;
     for (const auto& [name, sec] : data.stage_seconds) stages[name] += sec;
     j["stage_seconds"] = stages;
