@@ -109,6 +109,21 @@ nlohmann::json interrupt(const std::string& args, const std::string& dir, int si
   return s;
 }
 
+// Interrupts `cmd` (SIGINT, then SIGTERM on its resume) in `dir`, each time going on with
+// the summary's command, which `cmd` becomes; returns how many interrupts came before the end
+// (2 unless the run ended first), with the last interrupted summary's wall time in `wall`.
+int interrupt_twice(std::string& cmd, const std::string& dir, double& wall) {
+  int stops = 0;
+  for (int sig : {SIGINT, SIGTERM}) {
+    const nlohmann::json s = interrupt(cmd, dir, sig);
+    if (s.is_null()) break;
+    ++stops;
+    wall = s["wall_time_s"];
+    cmd = resume_args(s);
+  }
+  return stops;
+}
+
 // Starts `args` (a relaxation without frames writing a checkpoint at every output step)
 // and kills it outright (SIGKILL) once its log has two rows more than now, where its
 // checkpoint's two files agree; returns the checkpoint's summary (status "running").
@@ -303,15 +318,8 @@ TEST(Resume, ARelaxationInterruptedTwiceEndsAsTheUninterruptedOne) {
   ASSERT_EQ(run(RELAX + " --out " + dir + "/whole").code, 0);
   const std::string cut = dir + "/cut";
   std::string cmd = RELAX + " --out " + cut;
-  int stops = 0;
   double wall = 0;
-  for (int sig : {SIGINT, SIGTERM}) {
-    const nlohmann::json s = interrupt(cmd, cut, sig);
-    if (s.is_null()) break;
-    ++stops;
-    wall = s["wall_time_s"];
-    cmd = resume_args(s);
-  }
+  const int stops = interrupt_twice(cmd, cut, wall);
   ASSERT_EQ(stops, 2) << "the run ended before it was interrupted twice";
   const Result r = run(cmd);
   ASSERT_EQ(r.code, 0) << cmd << "\n" << r.output;
@@ -352,15 +360,8 @@ TEST(Resume, APullInterruptedTwiceEndsAsTheUninterruptedOne) {
   ASSERT_EQ(run(args + dir + "/whole").code, 0);
   const std::string cut = dir + "/cut";
   std::string cmd = args + cut;
-  int stops = 0;
   double wall = 0;
-  for (int sig : {SIGINT, SIGTERM}) {
-    const nlohmann::json s = interrupt(cmd, cut, sig);
-    if (s.is_null()) break;
-    ++stops;
-    wall = s["wall_time_s"];
-    cmd = resume_args(s);
-  }
+  const int stops = interrupt_twice(cmd, cut, wall);
   ASSERT_EQ(stops, 2) << "the pull ended before it was interrupted twice";
   const Result r = run(cmd);
   ASSERT_EQ(r.code, 0) << cmd << "\n" << r.output;
