@@ -37,8 +37,12 @@ soak() {  # name, then the command's arguments (without --out)
       exit 1
     fi
     interrupts=$((interrupts + 1))
-    grep -q '"status": "interrupted"' "$out/summary.json" ||
-      { echo "soak: $name: an interrupted run's summary does not say so" >&2; exit 1; }
+    grep -q '"status": "interrupted"' "$out/summary.json" || {
+      echo "soak: $name: leg $((interrupts + 1)) exited with $rc but its summary does not say" \
+        "it was interrupted (status: $(grep -o '"status": "[a-z]*"' "$out/summary.json" 2>/dev/null ||
+          echo 'no summary'))" >&2
+      exit 1
+    }
     cmd=$(/usr/bin/python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["resume_command"])' "$out/summary.json")
     # the command as the summary gives it, with this build's knitsim (exec: the signal
     # must reach knitsim, not a shell that leaves it running)

@@ -38,8 +38,9 @@ int main(int argc, char** argv) {
   for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; }))
     if (CLI::Option* out = sub->get_option_no_throw("--out")) out->check(named);
   // the first SIGINT/SIGTERM ends a run cleanly after its current step (state and summary
-  // written); a second one ends the process at once
-  knit::InterruptHandler interrupts;
+  // written); a second one ends the process at once. Installed until the process ends: a
+  // signal that comes after a finished run (while it exits) leaves its exit status 0
+  knit::handle_interrupts_until_exit();
   // the run directories a command opens stay locked until it ends: its own outputs after
   // the recipe's (a stretch's relaxed.kstate) are named in the directory's marker too
   const knit::RunDirectoryScope run_directories;

@@ -19,21 +19,29 @@ extern "C" void on_signal(int sig) {
   g_signal = sig;
 }
 
-}  // namespace
-
-InterruptHandler::InterruptHandler() {
+void install(struct sigaction* old_int, struct sigaction* old_term) {
   g_signal = 0;
   struct sigaction sa {};
   sa.sa_handler = on_signal;
   sigemptyset(&sa.sa_mask);
   sa.sa_flags = SA_RESTART;
-  sigaction(SIGINT, &sa, &g_old_int);
-  sigaction(SIGTERM, &sa, &g_old_term);
+  sigaction(SIGINT, &sa, old_int);
+  sigaction(SIGTERM, &sa, old_term);
+}
+
+}  // namespace
+
+InterruptHandler::InterruptHandler() {
+  install(&g_old_int, &g_old_term);
 }
 
 InterruptHandler::~InterruptHandler() {
   sigaction(SIGINT, &g_old_int, nullptr);
   sigaction(SIGTERM, &g_old_term, nullptr);
+}
+
+void handle_interrupts_until_exit() {
+  install(nullptr, nullptr);
 }
 
 const char* interrupt_signal_name(int signal) {

@@ -13,6 +13,13 @@ class InterruptHandler {
   InterruptHandler& operator=(const InterruptHandler&) = delete;
 };
 
+/// Installs the handlers for the rest of the process, never restored: a program's main
+/// calls it first. A signal that arrives once the work is done (while the program writes
+/// its last lines, destroys its statics or, under the sanitizers, checks for leaks) then
+/// sets the flag that nothing reads any more, and the program exits with its own status
+/// rather than being killed with a finished run's outputs on disk.
+void handle_interrupts_until_exit();
+
 /// The signal received since the last clear (SIGINT, SIGTERM), or 0.
 int interrupt_signal();
 /// "SIGINT" or "SIGTERM", for messages about a received signal.
