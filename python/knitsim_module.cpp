@@ -33,20 +33,21 @@
 
 #include "knit/analysis/fabric_shape.hpp"
 #include "knit/io/export.hpp"
-#include "knit/io/input_file.hpp"
-#include "knit/io/run_dir.hpp"
 #include "knit/io/state_file.hpp"
 #include "knit/io/states.hpp"
 #include "knit/pattern/knitout.hpp"
+#include "knit/present/stretch_figures.hpp"
 #include "knit/recipes/relax_knit.hpp"
 #include "knit/recipes/sheet_stretch.hpp"
 #include "knit/recipes/simulate_scene.hpp"
 #include "knit/recipes/stretch.hpp"
+#include "knit/run/interrupt.hpp"
+#include "knit/run/runner.hpp"
 #include "knit/scene/json_reader.hpp"
 #include "knit/scene/scene.hpp"
-#include "knit/solver/interrupt.hpp"
-#include "knit/solver/runner.hpp"
 #include "knit/solver/simulator.hpp"
+#include "knit/util/input_file.hpp"
+#include "knit/util/run_dir.hpp"
 
 namespace py = pybind11;
 using namespace pybind11::literals;
@@ -1073,6 +1074,7 @@ PYBIND11_MODULE(knitsim, m) {
         o.out_dir = out;
         o.overwrite = overwrite;
         o.render = render;
+        o.figures = write_stretch_figures;  // the plots, renders and movie
         o.progress = progress;
         o.write_frames = frames && !out.empty();
         // the arguments first, then the files they name (as the command checks its options

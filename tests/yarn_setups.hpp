@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 
+#include "knit/constraints/groups.hpp"
 #include "knit/model/model.hpp"
 #include "knit/solver/simulator.hpp"
 

@@ -4,7 +4,7 @@
 
 #include "commands.hpp"
 #include "common.hpp"
-#include "knit/io/plot.hpp"
+#include "knit/present/plot.hpp"
 
 namespace knitsim {
 

@@ -8,10 +8,10 @@
 
 #include "commands.hpp"
 #include "common.hpp"
-#include "knit/io/run_dir.hpp"
 #include "knit/io/state_file.hpp"
 #include "knit/pattern/knitout.hpp"
 #include "knit/recipes/relax_knit.hpp"
+#include "knit/util/run_dir.hpp"
 
 namespace knitsim {
 

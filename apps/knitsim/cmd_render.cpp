@@ -11,11 +11,11 @@
 
 #include "commands.hpp"
 #include "common.hpp"
-#include "knit/io/process.hpp"
-#include "knit/io/run_dir.hpp"
 #include "knit/io/states.hpp"
-#include "knit/render/render.hpp"
-#include "knit/render/sequence.hpp"
+#include "knit/present/render.hpp"
+#include "knit/present/sequence.hpp"
+#include "knit/util/process.hpp"
+#include "knit/util/run_dir.hpp"
 
 namespace knitsim {
 namespace fs = std::filesystem;

@@ -5,9 +5,9 @@
 
 #include "commands.hpp"
 #include "common.hpp"
-#include "knit/io/run_dir.hpp"
 #include "knit/io/state_file.hpp"
 #include "knit/recipes/simulate_scene.hpp"
+#include "knit/util/run_dir.hpp"
 
 namespace knitsim {
 

@@ -15,12 +15,12 @@
 
 #include "commands.hpp"
 #include "common.hpp"
-#include "knit/io/plot.hpp"
-#include "knit/io/run_dir.hpp"
 #include "knit/io/state_file.hpp"
+#include "knit/present/stretch_figures.hpp"
 #include "knit/recipes/relax_knit.hpp"
 #include "knit/recipes/sheet_stretch.hpp"
 #include "knit/recipes/stretch.hpp"
+#include "knit/util/run_dir.hpp"
 
 namespace knitsim {
 
@@ -200,6 +200,7 @@ void register_stretch(CLI::App& app) {
     o->stretch.progress = !o->quiet;
     o->stretch.write_frames = !o->no_frames;
     o->stretch.render = !o->no_render;
+    o->stretch.figures = knit::write_stretch_figures;  // the plots, renders and movie
     o->stretch.resume = o->resume;
     o->stretch.resume_command = resume_command(o->out);
     add_provenance(o->stretch.extra);

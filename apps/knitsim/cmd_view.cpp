@@ -1,4 +1,4 @@
-// knitsim view STATE|DIR --out page.html: a run in the browser (src/knit/io/viewer.hpp)
+// knitsim view STATE|DIR --out page.html: a run in the browser (src/knit/present/viewer.hpp)
 #include <filesystem>
 #include <iostream>
 #include <stdexcept>
@@ -7,7 +7,8 @@
 #include "common.hpp"
 #include "knit/io/state_file.hpp"
 #include "knit/io/states.hpp"
-#include "knit/io/viewer.hpp"
+#include "knit/present/viewer.hpp"
+#include "knit/util/atomic_file.hpp"
 
 namespace knitsim {
 namespace fs = std::filesystem;

@@ -11,8 +11,8 @@
 #include "knit/io/export.hpp"
 #include "knit/io/states.hpp"
 #include "knit/model/params.hpp"
+#include "knit/run/interrupt.hpp"
 #include "knit/scene/scene_objects.hpp"
-#include "knit/solver/interrupt.hpp"
 
 namespace knitsim {
 

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "knit/solver/runner.hpp"
+#include "knit/run/runner.hpp"
 #include "options.hpp"
 
 namespace knitsim {

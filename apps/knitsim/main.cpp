@@ -7,9 +7,9 @@
 
 #include "commands.hpp"
 #include "common.hpp"
-#include "knit/io/input_file.hpp"
-#include "knit/io/run_dir.hpp"
-#include "knit/solver/interrupt.hpp"
+#include "knit/run/interrupt.hpp"
+#include "knit/util/input_file.hpp"
+#include "knit/util/run_dir.hpp"
 
 int main(int argc, char** argv) {
   knitsim::set_command_line(argc, argv);

@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "knit/io/state_file.hpp"
-#include "knit/solver/relaxation.hpp"
+#include "knit/run/relaxation.hpp"
 #include "run_knitsim.hpp"
 
 namespace {

@@ -4,6 +4,7 @@
 // pulled about by clamps changes by exactly the external forces (Newton's second law).
 #include <gtest/gtest.h>
 
+#include "knit/constraints/groups.hpp"
 #include "knit/model/model.hpp"
 #include "knit/solver/simulator.hpp"
 
@@ -179,7 +180,7 @@ TEST(ConstraintGroups, ModelListsItsGroupsInOrder) {
   Clamp c;
   c.points = {{7, 1.0}};
   b.add_clamp(c);
-  const Model m = b.build(Params{});
+  const Model m = with_constraint_groups(b.build(Params{}));
   ASSERT_EQ(m.constraint_groups.size(), 4u);
   const char* names[] = {"length", "pin0", "glue0", "clamp0"};
   for (int k = 0; k < 4; ++k) EXPECT_EQ(m.constraint_groups[k]->name(), names[k]);

@@ -4,6 +4,7 @@
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #endif
 #include "knit/constraints/projection.hpp"
+#include "knit/constraints/groups.hpp"
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
@@ -91,7 +92,7 @@ TEST(Projection, ConvergesFromPerturbedStateWithinFiveIterations) {
 TEST(Projection, PreservesCentreOfMassWithoutPins) {
   ModelBuilder b;
   b.add_yarn(wavy(25));
-  const Model m = b.build(Params{});
+  const Model m = with_constraint_groups(b.build(Params{}));
   FastProjection proj(m);
   Eigen::VectorXd q = test::jitter(b.positions(), 0.03, 21);
   auto com = [&](const Eigen::VectorXd& x) {
@@ -220,7 +221,7 @@ TEST(Projection, DoesNotDependOnThreadCount) {
   for (int y = 0; y < 6; ++y)
     b.add_yarn(wavy(300, 0.3 * y).colwise() + Eigen::Vector3d(0, 2.0 * y, 0));
   b.add_glue({{10, 0.5}, {300 + 10, 0.5}});
-  const Model m = b.build(Params{});
+  const Model m = with_constraint_groups(b.build(Params{}));
   const Eigen::VectorXd q0 = test::jitter(b.positions(), 0.02, 40);
   // an explicit arena: a global_control alone does not raise the concurrency of the
   // thread's implicit arena after its first use

@@ -15,10 +15,10 @@
 #include "io/external_readers.hpp"
 #include "io/test_states.hpp"
 #include "knit/io/import.hpp"
-#include "knit/io/process.hpp"
 #include "knit/io/states.hpp"
 #include "knit/objects/mesh_shape.hpp"
 #include "knit/spline/fit.hpp"
+#include "knit/util/process.hpp"
 
 namespace knit {
 namespace {

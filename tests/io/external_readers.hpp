@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "knit/io/process.hpp"
+#include "knit/util/process.hpp"
 
 namespace knit::test {
 

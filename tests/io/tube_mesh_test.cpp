@@ -14,6 +14,7 @@
 #include "io/test_states.hpp"
 #include "knit/io/export.hpp"
 #include "knit/io/states.hpp"
+#include "knit/util/atomic_file.hpp"
 
 namespace knit {
 namespace {

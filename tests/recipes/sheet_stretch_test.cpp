@@ -12,9 +12,9 @@
 #include <map>
 
 #include "knit/io/state_file.hpp"
+#include "knit/run/interrupt.hpp"
 #include "knit/sheet/embedding.hpp"
 #include "knit/sheet/sheet_solver.hpp"
-#include "knit/solver/interrupt.hpp"
 #include "recipes/relaxed_sample.hpp"
 
 namespace knit {

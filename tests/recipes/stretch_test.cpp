@@ -12,10 +12,11 @@
 #include <fstream>
 #include <sstream>
 
-#include "knit/io/plot.hpp"
-#include "knit/io/process.hpp"
 #include "knit/io/state_file.hpp"
-#include "knit/solver/interrupt.hpp"
+#include "knit/present/plot.hpp"
+#include "knit/present/stretch_figures.hpp"
+#include "knit/run/interrupt.hpp"
+#include "knit/util/process.hpp"
 #include "recipes/relaxed_sample.hpp"
 
 namespace knit {
@@ -38,6 +39,7 @@ TEST(Stretch, ForceRisesAndTheClampsBalance) {
   o.overwrite = true;
   o.render_width = 64;  // small pictures: the test checks that they are made
   o.render_height = 48;
+  o.figures = write_stretch_figures;
   const StretchResult r = stretch_knit(relaxed_sample(), o);
   ASSERT_EQ(r.report.summary["status"], "ok") << r.report.summary.dump(2);
   ASSERT_GE(r.curve.size(), 15u);
@@ -190,6 +192,7 @@ TEST(Stretch, AnUnstablePullIsRenderedUpToWhereItStopped) {
   o.overwrite = true;
   o.render_width = 64;
   o.render_height = 48;
+  o.figures = write_stretch_figures;
   const StretchResult r = stretch_knit(relaxed_sample(), o);
   ASSERT_EQ(r.report.summary["status"], "unstable") << r.report.summary.dump(2);
   ASSERT_GE(r.curve.size(), 2u);

@@ -5,6 +5,7 @@
 #include <fstream>
 #include <set>
 
+#include "knit/constraints/groups.hpp"
 #include "knit/io/state_file.hpp"
 #include "knit/recipes/relax_knit.hpp"
 #include "knit/recipes/simulate_scene.hpp"
@@ -92,8 +93,9 @@ TEST(SceneKnit, PlacedAtRestWithItsStitchesAndGlues) {
     held_segments += all;
   }
   ASSERT_GT(held_segments, 0);
-  EXPECT_EQ(m.constraint_groups[0]->name(), "length");
-  EXPECT_EQ(m.constraint_groups[0]->rows(), m.num_seg() - held_segments);
+  const Model groups = with_constraint_groups(m);
+  EXPECT_EQ(groups.constraint_groups[0]->name(), "length");
+  EXPECT_EQ(groups.constraint_groups[0]->rows(), m.num_seg() - held_segments);
   ASSERT_EQ(scene.knits.size(), 1u);
   EXPECT_FALSE(scene.knits[0].in_the_round);
 }

@@ -14,6 +14,7 @@
 
 #include <cmath>
 
+#include "knit/constraints/groups.hpp"
 #include "knit/solver/simulator.hpp"
 
 namespace knit {

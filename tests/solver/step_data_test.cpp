@@ -10,8 +10,8 @@
 
 #include "knit/contact/contact_term.hpp"
 #include "knit/recipes/relax_knit.hpp"
+#include "knit/run/runner.hpp"
 #include "knit/scene/scene.hpp"
-#include "knit/solver/runner.hpp"
 
 namespace knit {
 namespace {

@@ -1,6 +1,6 @@
 #include "knit/analysis/rest_reference.hpp"
 
-#include "knit/io/input_file.hpp"
+#include "knit/util/input_file.hpp"
 
 #include <algorithm>
 #include <cmath>

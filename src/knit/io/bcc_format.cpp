@@ -7,8 +7,8 @@
 #include <cstdlib>
 
 #include "knit/io/bcc.hpp"
-#include "knit/io/byte_reader.hpp"
 #include "knit/io/import.hpp"
+#include "knit/util/byte_reader.hpp"
 
 namespace knit {
 namespace {

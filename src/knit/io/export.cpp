@@ -1,6 +1,6 @@
 #include "knit/io/export.hpp"
 
-#include "knit/io/byte_reader.hpp"
+#include "knit/util/byte_reader.hpp"
 
 #include <charconv>
 #include <cmath>
@@ -10,6 +10,7 @@
 #include "knit/io/bcc.hpp"
 #include "knit/io/states.hpp"
 #include "knit/objects/mesh_shape.hpp"
+#include "knit/util/atomic_file.hpp"
 
 namespace knit {
 namespace {

@@ -23,6 +23,7 @@
 #include "knit/io/state_file.hpp"
 #include "knit/io/tube_mesh.hpp"
 #include "knit/objects/object.hpp"
+#include "knit/util/atomic_file.hpp"
 
 namespace knit {
 

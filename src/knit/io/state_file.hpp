@@ -29,8 +29,8 @@
 #include <string>
 #include <vector>
 
-#include "knit/io/run_totals.hpp"
 #include "knit/model/model.hpp"
+#include "knit/model/run_totals.hpp"
 #include "knit/model/state.hpp"
 
 namespace knit {
@@ -65,8 +65,5 @@ StateFile make_state_file(const Model& model, const State& state);
 void write_state_file(const std::string& path, const StateFile& file);
 /// Reads and validates; throws std::runtime_error naming the file and byte offset.
 StateFile read_state_file(const std::string& path);
-
-/// Writes `contents` to `path` atomically (temporary file + rename). Throws on failure.
-void write_file_atomic(const std::string& path, const std::string& contents);
 
 }  // namespace knit

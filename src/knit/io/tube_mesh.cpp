@@ -8,8 +8,8 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "knit/io/byte_reader.hpp"
 #include "knit/io/states.hpp"
+#include "knit/util/byte_reader.hpp"
 
 namespace knit {
 

@@ -10,8 +10,8 @@
 #include <cmath>
 #include <map>
 
-#include "knit/io/byte_reader.hpp"
 #include "knit/io/import.hpp"
+#include "knit/util/byte_reader.hpp"
 
 namespace knit {
 

@@ -90,7 +90,7 @@ struct Clamp {
   /// control points held (global indices): a knit's rows or columns are held by the
   /// control points of their segments, which fixes those segments' shape exactly —
   /// their length rows, and glues whose points all lie on such segments, are then left to
-  /// the clamp (see build_constraint_groups)
+  /// the clamp (see build_constraint_groups, constraints/groups.hpp)
   std::vector<int> control_points;
   /// the position at time 0 (cm) of each held point, then of each held control point
   std::vector<Eigen::Vector3d> rest;
@@ -165,7 +165,9 @@ class Model {
   std::optional<KnitInfo> knit;
   /// The rows the projection enforces: "length" (when solver.length_constraints), then
   /// one group per pin ("pin0", …), per glue ("glue0", …) and per clamp (its name), in
-  /// that order. Shared, immutable.
+  /// that order. Shared, immutable. Built from the pins, glues and clamps above by
+  /// build_constraint_groups (constraints/groups.hpp), which the Simulator calls on the
+  /// model it is given: a Model fresh from ModelBuilder::build has none.
   std::vector<std::shared_ptr<const ConstraintGroup>> constraint_groups;
   QuadratureTable quad;          ///< energy quadrature (Simpson)
   QuadratureTable contact_quad;  ///< contact quadrature (midpoint)
@@ -244,13 +246,6 @@ Model scale_rest_lengths(const Model& model, double scale);
 /// control point's (Discretisation::end_mass_floor; ModelBuilder::build applies the
 /// model's own). Does nothing for fraction ≤ 0.
 void apply_end_mass_floor(Model& model, double fraction);
-
-/// Builds model.constraint_groups from its parameters, pins, glues and clamps. Rows that a
-/// clamp's held control points make redundant are left out: the length row of a segment
-/// whose four control points are all held, and a glue whose two points lie on such
-/// segments (both are fixed by the clamps already, and redundant rows make the split of
-/// forces between groups arbitrary).
-void build_constraint_groups(Model& model);
 
 /// Position y(s) of a yarn point.
 Eigen::Vector3d point_position(const Model& model, const Eigen::VectorXd& q, const YarnPoint& p);

@@ -13,9 +13,9 @@
 #include <stdexcept>
 #include <unordered_map>
 
-#include "knit/io/input_file.hpp"
-#include "knit/io/state_file.hpp"
 #include "knit/model/params.hpp"
+#include "knit/util/atomic_file.hpp"
+#include "knit/util/input_file.hpp"
 
 namespace knit {
 

@@ -9,7 +9,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "knit/io/input_file.hpp"
+#include "knit/util/input_file.hpp"
 
 namespace knit {
 

@@ -1,7 +1,7 @@
 #include "knit/pattern/pattern.hpp"
 
-#include "knit/io/input_file.hpp"
 #include "knit/pattern/knitout.hpp"
+#include "knit/util/input_file.hpp"
 
 #include <algorithm>
 #include <cctype>

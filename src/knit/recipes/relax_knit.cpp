@@ -8,11 +8,11 @@
 #include "knit/analysis/fabric_shape.hpp"
 #include "knit/filters/fire.hpp"
 #include "knit/filters/nonrigid_damping.hpp"
-#include "knit/io/input_file.hpp"
-#include "knit/io/run_dir.hpp"
 #include "knit/io/state_file.hpp"
 #include "knit/pattern/knitout.hpp"
 #include "knit/pattern/pattern.hpp"
+#include "knit/util/input_file.hpp"
+#include "knit/util/run_dir.hpp"
 
 namespace knit {
 

@@ -16,7 +16,7 @@
 #include "knit/model/model.hpp"
 #include "knit/model/state.hpp"
 #include "knit/pattern/generator.hpp"
-#include "knit/solver/relaxation.hpp"
+#include "knit/run/relaxation.hpp"
 
 namespace knit {
 

@@ -11,12 +11,13 @@
 #include <stdexcept>
 
 #include "knit/analysis/fabric_shape.hpp"
-#include "knit/io/run_dir.hpp"
 #include "knit/io/state_file.hpp"
+#include "knit/run/interrupt.hpp"
 #include "knit/sheet/embedding.hpp"
 #include "knit/sheet/sheet_solver.hpp"
-#include "knit/solver/interrupt.hpp"
 #include "knit/solver/simulator.hpp"
+#include "knit/util/atomic_file.hpp"
+#include "knit/util/run_dir.hpp"
 
 namespace knit {
 

@@ -2,9 +2,9 @@
 
 #include "knit/filters/nonrigid_damping.hpp"
 #include "knit/filters/yarn_friction.hpp"
-#include "knit/io/run_dir.hpp"
 #include "knit/objects/collision_filter.hpp"
 #include "knit/objects/object.hpp"
+#include "knit/util/run_dir.hpp"
 
 namespace knit {
 

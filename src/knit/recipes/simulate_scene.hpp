@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "knit/run/runner.hpp"
 #include "knit/scene/scene.hpp"
-#include "knit/solver/runner.hpp"
 
 namespace knit {
 

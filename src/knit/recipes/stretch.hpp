@@ -10,6 +10,7 @@
 // Recorded at every written state (StretchSample): nominal strain, the force each clamp
 // exerts along the pull axis (from the clamps' constraint records, positive in tension),
 // the sample's width across the pull at its middle, energies and closest approach.
+#include <functional>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -18,11 +19,13 @@
 #include "knit/io/state_file.hpp"
 #include "knit/model/model.hpp"
 #include "knit/model/params.hpp"
-#include "knit/solver/runner.hpp"
+#include "knit/run/runner.hpp"
 
 namespace knit {
 
 enum class StretchDirection { COURSE, WALE, BIAS };
+
+struct StretchSample;
 
 /// "course", "wale" or "bias"; throws std::invalid_argument naming the value otherwise.
 StretchDirection parse_stretch_direction(const std::string& name);
@@ -80,6 +83,15 @@ struct StretchOptions {
   bool render = true;
   int render_width = 640, render_height = 480;
   nlohmann::json extra = nlohmann::json::object();  ///< merged into the summary
+  /// Draws the figures of a pull into out_dir after its stretch.csv is written: the force
+  /// and width plots and, when `render`, the renders and movie (arguments: these options,
+  /// the curve, the title, whether the pull has ended); returns the summary's "renders"
+  /// entry, or null. The study draws nothing itself (presentation sits above it): the front
+  /// ends set this to knit::write_stretch_figures (present/stretch_figures.hpp); empty, a
+  /// run writes no pictures.
+  std::function<nlohmann::json(const StretchOptions&, const std::vector<StretchSample>&,
+                               const std::string&, bool)>
+      figures;
 };
 
 /// One sample of the curve.
@@ -151,11 +163,11 @@ StretchGeometry stretch_geometry(const std::string& kstate_path, const StretchOp
 /// "PATTERN, DIRECTION" for titles.
 std::string stretch_label(const StateFile& file, StretchDirection direction);
 
-/// After a run that wrote its summary (and frames) into options.out_dir: stretch.csv, the
-/// force and width plots titled with `label`, and, when `ended` and options.render, the
-/// renders and movie (listed in the summary's "renders"). A pull has ended when it reached
-/// its strain or stopped for good (unstable): then it is rendered up to the last strain
-/// it reached; an interrupted one goes on with --resume and is rendered when it ends.
+/// After a run that wrote its summary (and frames) into options.out_dir: stretch.csv, then
+/// options.figures (plots titled with `label`; when `ended` and options.render, renders
+/// and movie, listed in the summary's "renders"). A pull has ended when it reached its
+/// strain or stopped for good (unstable): then it is rendered up to the last strain it
+/// reached; an interrupted one goes on with --resume and is rendered when it ends.
 void write_stretch_outputs(const StretchOptions& options, const std::vector<StretchSample>& curve,
                            const std::string& label, bool ended);
 
@@ -192,10 +204,5 @@ std::vector<StretchSample> read_stretch_csv(const std::string& path);
 /// potential_energy_erg, kinetic_energy_erg, min_contact_distance, edge_curl,
 /// force_residual (cm/s²; −1 when not measured), equilibrium (1 at the end of a hold).
 void write_stretch_csv(const std::vector<StretchSample>& curve, const std::string& path);
-
-/// Draws the force–strain curves (moving clamp) of several stretch runs' directories in
-/// one plot, each labelled "PATTERN DIRECTION, SPEED cm/s" from its summary. Returns the path
-/// written.
-std::string plot_stretch_runs(const std::vector<std::string>& dirs, const std::string& out_png);
 
 }  // namespace knit

@@ -10,8 +10,8 @@
 #include <sstream>
 #include <vector>
 
-#include "knit/io/input_file.hpp"
 #include "knit/model/params.hpp"
+#include "knit/util/input_file.hpp"
 
 namespace knit {
 

@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "knit/constraints/clamp.hpp"
+#include "knit/constraints/groups.hpp"
 #include "knit/constraints/inextensibility.hpp"
 #include "knit/contact/contact_term.hpp"
 #include "knit/energy/bending.hpp"
@@ -106,7 +107,9 @@ std::vector<std::unique_ptr<Term>> default_terms(const Model& model) {
 Simulator::Simulator(Model model) : Simulator(model, default_terms(model)) {}
 
 Simulator::Simulator(Model model, std::vector<std::unique_ptr<Term>> terms)
-    : m_model(std::move(model)), m_terms(std::move(terms)), m_projection(m_model) {
+    : m_model(with_constraint_groups(std::move(model))),
+      m_terms(std::move(terms)),
+      m_projection(m_model) {
   for (auto& term : m_terms) enable_operator_stiffness(*term);
 }
 
