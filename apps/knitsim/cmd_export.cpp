@@ -1,4 +1,4 @@
-// knitsim export STATE|DIR --format usd|obj|bcc|ply|vtp|obj-mesh|ply-mesh|glb --out FILE
+// knitsim export STATE|DIR --format FORMAT --out FILE (the formats: knit/io/formats.hpp)
 #include <filesystem>
 #include <iostream>
 #include <stdexcept>
@@ -6,6 +6,7 @@
 #include "commands.hpp"
 #include "common.hpp"
 #include "knit/io/export.hpp"
+#include "knit/io/formats.hpp"
 #include "knit/io/states.hpp"
 #include "knit/io/tube_mesh.hpp"
 
@@ -124,9 +125,7 @@ void register_export(CLI::App& app) {
   add_required_path(sub, "input", args->input, "state file or directory of .kstate files")
       ->check(existing_path());
   add_choice(sub, "--format,-f", args->format,
-             "usd (exact curves, .usda), obj, bcc, ply, vtp (sampled centrelines; vtp with "
-             "per-point radius, yarn, row, column, velocity for ParaView), obj-mesh, ply-mesh, "
-             "glb (yarn tubes as triangles; glb in metres, Y up)",
+             knit::export_format_list(),
              knit::export_formats(), "none (required)")
       ->required();
   add_out_option(sub, args->out, "output file (a directory for several obj/bcc/ply)");
@@ -147,5 +146,7 @@ void register_export(CLI::App& app) {
                 "glb is always metres)");
   sub->callback([args] { run_export(*args); });
 }
+
+const bool export_added = add_command(30, register_export);
 
 }  // namespace knitsim

@@ -6,6 +6,7 @@
 
 #include "commands.hpp"
 #include "common.hpp"
+#include "knit/io/obj.hpp"
 #include "knit/objects/mesh_shape.hpp"
 #include "knit/scene/scene_objects.hpp"
 
@@ -58,5 +59,7 @@ void register_mesh(CLI::App& app) {
                                 (names.empty() ? "it has none" : "it has " + names) + ")");
   });
 }
+
+const bool mesh_added = add_command(70, register_mesh);
 
 }  // namespace knitsim

@@ -27,4 +27,6 @@ void register_plot(CLI::App& app) {
   });
 }
 
+const bool plot_added = add_command(50, register_plot);
+
 }  // namespace knitsim

@@ -246,4 +246,6 @@ void register_render(CLI::App& app) {
   sub->callback([a] { run_render(*a); });
 }
 
+const bool render_added = add_command(40, register_render);
+
 }  // namespace knitsim

@@ -110,4 +110,6 @@ void register_simulate(CLI::App& app) {
   });
 }
 
+const bool simulate_added = add_command(10, register_simulate);
+
 }  // namespace knitsim

@@ -301,4 +301,6 @@ void register_stretch(CLI::App& app) {
   });
 }
 
+const bool stretch_added = add_command(60, register_stretch);
+
 }  // namespace knitsim

@@ -25,4 +25,6 @@ void register_version(CLI::App& app) {
   });
 }
 
+const bool version_added = add_command(90, register_version);
+
 }  // namespace knitsim

@@ -69,4 +69,6 @@ void register_view(CLI::App& app) {
   sub->callback([args] { run_view(*args); });
 }
 
+const bool view_added = add_command(80, register_view);
+
 }  // namespace knitsim

@@ -18,15 +18,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   // before the subcommands, which take the formatter over
   app.formatter(knitsim::help_formatter());
-  knitsim::register_simulate(app);
-  knitsim::register_relax(app);
-  knitsim::register_export(app);
-  knitsim::register_render(app);
-  knitsim::register_plot(app);
-  knitsim::register_stretch(app);
-  knitsim::register_mesh(app);
-  knitsim::register_view(app);
-  knitsim::register_version(app);
+  knitsim::register_commands(app);
   app.footer(knitsim::help_footer());
   for (CLI::App* sub : app.get_subcommands({})) sub->footer(knitsim::help_footer());
   // an output named "" would be no output at all: refused by every command alike

@@ -104,7 +104,7 @@ std::shared_ptr<CLI::Formatter> help_formatter() {
 const char* const SOLVER_GROUP = "Solver options (docs/cli.md#solver-options)";
 
 Range param(const std::string& name) {
-  const knit::ParamRange& r = knit::param_range(name);
+  const knit::ParamRange r = knit::param_range(name);
   return closed(r.min, r.max);
 }
 

@@ -28,7 +28,7 @@ inline Range closed(double lo, double hi) {
 inline Range positive(double hi) {
   return {0, hi, true};
 }
-/// A scene parameter's working range (knit::param_ranges(), by its name).
+/// A scene parameter's working range (knit::param_table(), by its name).
 Range param(const std::string& name);
 
 /// "[0, 1]", "(0, 100000]".

@@ -1,3 +1,4 @@
+#include "knit/io/obj.hpp"
 #include "knit/io/export.hpp"
 
 #include <gtest/gtest.h>

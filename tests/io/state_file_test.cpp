@@ -180,13 +180,13 @@ TEST(StateFile, RelaxationSettingsRoundTrip) {
   };
   using Spoil = void (*)(KnitRelaxSettings&);
   const std::vector<std::pair<Spoil, std::string>> spoiled = {
-      {[](KnitRelaxSettings& b) { b.time_step = -1; }, "time_step"},
-      {[](KnitRelaxSettings& b) { b.time_step = std::numeric_limits<double>::quiet_NaN(); },
+      {[](KnitRelaxSettings& b) { b.params.solver.time_step = -1; }, "time_step"},
+      {[](KnitRelaxSettings& b) { b.params.solver.time_step = std::numeric_limits<double>::quiet_NaN(); },
        "time_step"},
       {[](KnitRelaxSettings& b) { b.check_every = 0; }, "check_every"},
       {[](KnitRelaxSettings& b) { b.contact_reuse_widen = 0.5; }, "contact_reuse_widen"},
-      {[](KnitRelaxSettings& b) { b.contact_points = 65; }, "contact_points"},
-      {[](KnitRelaxSettings& b) { b.alpha_small = 2; }, "alpha_small"}};
+      {[](KnitRelaxSettings& b) { b.params.discretisation.contact_points = 65; }, "contact_points"},
+      {[](KnitRelaxSettings& b) { b.params.material.alpha_small = 2; }, "alpha_small"}};
   for (const auto& [spoil, key] : spoiled) {
     KnitRelaxSettings bad = *g.knit->relaxation;
     spoil(bad);

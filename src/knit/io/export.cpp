@@ -278,8 +278,12 @@ void export_obj(const StateFile& state, const std::string& path, int per_segment
   write_file_atomic(path, obj_text(state, per_segment));
 }
 
+std::string bcc_text(const StateFile& state, int per_segment) {
+  return bcc_polylines(sample_yarns(state, per_segment), "knitsim, units cm");
+}
+
 void export_bcc(const StateFile& state, const std::string& path, int per_segment) {
-  write_file_atomic(path, bcc_polylines(sample_yarns(state, per_segment), "knitsim, units cm"));
+  write_file_atomic(path, bcc_text(state, per_segment));
 }
 
 std::string ply_bytes(const StateFile& state, bool binary, int per_segment) {
@@ -405,37 +409,5 @@ void export_vtp(const StateFile& state, const std::string& path, int per_segment
   write_file_atomic(path, vtp_text(state, per_segment));
 }
 
-const std::vector<std::string>& export_formats() {
-  static const std::vector<std::string> formats = {"usd", "obj",      "bcc",      "ply",
-                                                   "vtp", "obj-mesh", "ply-mesh", "glb"};
-  return formats;
-}
-
-std::string export_extension(const std::string& format) {
-  if (format == "usd") return ".usda";
-  if (format == "obj-mesh") return ".obj";
-  if (format == "ply-mesh") return ".ply";
-  for (const std::string& f : export_formats())
-    if (f == format) return "." + format;
-  std::string known;
-  for (const std::string& f : export_formats()) known += (known.empty() ? "" : ", ") + f;
-  throw std::invalid_argument("unknown export format '" + format + "' (known: " + known + ")");
-}
-
-void export_state(const StateFile& s, const std::string& format, const std::string& path,
-                  const ExportOptions& o) {
-  export_extension(format);  // refuses an unknown format
-  if (format == "obj") export_obj(s, path, o.samples);
-  if (format == "bcc") export_bcc(s, path, o.samples);
-  if (format == "ply") export_ply(s, path, o.binary_ply, o.samples);
-  if (format == "vtp") export_vtp(s, path, o.samples);
-  if (format == "usd") export_usd({s}, {s.state.time}, path, o.objects);
-  if (format == "obj-mesh" || format == "ply-mesh" || format == "glb") {
-    const TubeMesh m = tube_mesh(s, o.samples, o.sides);
-    write_file_atomic(path, format == "obj-mesh"   ? obj_mesh_text(m)
-                            : format == "ply-mesh" ? ply_mesh_bytes(m)
-                                                   : glb_bytes(m));
-  }
-}
 
 }  // namespace knit

@@ -46,7 +46,8 @@ std::string obj_text(const StateFile& state, int per_segment = EXPORT_SAMPLES_PE
 void export_obj(const StateFile& state, const std::string& path,
                 int per_segment = EXPORT_SAMPLES_PER_SEGMENT);
 
-/// BCC polylines (PL), one curve per yarn.
+/// BCC polylines (PL), one curve per yarn: the file's bytes.
+std::string bcc_text(const StateFile& state, int per_segment = EXPORT_SAMPLES_PER_SEGMENT);
 void export_bcc(const StateFile& state, const std::string& path,
                 int per_segment = EXPORT_SAMPLES_PER_SEGMENT);
 
@@ -64,7 +65,7 @@ std::string vtp_text(const StateFile& state, int per_segment = EXPORT_SAMPLES_PE
 void export_vtp(const StateFile& state, const std::string& path,
                 int per_segment = EXPORT_SAMPLES_PER_SEGMENT);
 
-/// Every format export_state writes: usd, obj, bcc, ply, vtp, obj-mesh, ply-mesh, glb.
+/// The name of every format export_state writes, in the registry's order (formats.hpp).
 const std::vector<std::string>& export_formats();
 /// The file name extension `format` writes (".usda", ".obj", ".ply", ".glb", ...).
 /// Throws std::invalid_argument for a format not in export_formats().
@@ -78,7 +79,8 @@ struct ExportOptions {
   std::vector<std::shared_ptr<const SceneObject>> objects;
 };
 
-/// Writes one state in `format` (one of export_formats()) to `path`, atomically.
+/// Writes one state in `format` (one of export_formats(); its writer in the registry,
+/// formats.hpp) to `path`, atomically.
 /// Throws std::invalid_argument for an unknown format or bad options.
 void export_state(const StateFile& state, const std::string& format, const std::string& path,
                   const ExportOptions& options = {});

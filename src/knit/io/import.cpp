@@ -16,35 +16,10 @@
 namespace knit {
 namespace {
 
-std::string lower_extension(const std::string& path) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return ext;
-}
-
-std::string read_whole_file(const std::string& path) {
-  return read_input_file(path, MAX_GEOMETRY_BYTES, "yarn geometry file");
-}
-
 }  // namespace
 
-bool is_importable(const std::string& path) {
-  const std::string ext = lower_extension(path);
-  return ext == ".yarns" || ext == ".bcc" || ext == ".obj";
-}
-
-std::vector<RawYarn> read_raw_yarns(const std::string& path) {
-  const std::string ext = lower_extension(path);
-  // what the path is (missing, a directory, a device) comes before what it is called
-  check_input_path(path, "yarn geometry file");
-  if (!is_importable(path))
-    throw std::runtime_error(path + ": unknown yarn file type '" + ext +
-                             "' (expected .yarns, .bcc or .obj)");
-  const std::string data = read_whole_file(path);
-  if (ext == ".yarns") return parse_yarns_file(data, path);
-  if (ext == ".bcc") return parse_bcc(data, path);
-  return parse_obj(data, path);
+std::string read_yarn_file(const std::string& path) {
+  return read_input_file(path, MAX_GEOMETRY_BYTES, "yarn geometry file");
 }
 
 std::vector<ImportedYarn> import_yarns(const std::string& path, const ImportOptions& options) {

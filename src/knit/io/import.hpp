@@ -55,15 +55,20 @@ std::vector<ImportedYarn> import_yarns(const std::string& path, const ImportOpti
 std::vector<ImportedYarn> fit_yarns(const std::vector<RawYarn>& yarns, const ImportOptions& options,
                                     const std::string& name);
 
+/// A yarn file's bytes (a regular file of at most MAX_GEOMETRY_BYTES).
+std::string read_yarn_file(const std::string& path);
+
 /// Parsers over a whole file's bytes; `name` is used in error messages.
 std::vector<RawYarn> parse_yarns_file(std::string_view data, const std::string& name);
 std::vector<RawYarn> parse_bcc(std::string_view data, const std::string& name);
 std::vector<RawYarn> parse_obj(std::string_view data, const std::string& name);
 
-/// Reads polylines from a file without fitting (dispatch on extension).
+/// Reads polylines from a file without fitting (its reader in the registry by extension,
+/// formats.hpp).
 std::vector<RawYarn> read_raw_yarns(const std::string& path);
 
-/// true when `path` has an extension import_yarns understands.
+/// true when `path` has an extension import_yarns understands (a format with a reader in
+/// the registry, formats.hpp).
 bool is_importable(const std::string& path);
 
 /// Smallest distance between spline samples of segment pairs that MODEL.md §3 treats as

@@ -1,12 +1,14 @@
-// Reader for Wavefront OBJ polylines: `v x y z [w]` vertices and `l i j k …` line elements
-// (1-based indices, negative ones relative to the vertices read so far, `i/t` accepted).
-// A line element that starts at the vertex where the previous one ended continues it, so
-// files that write a polyline as many two-point elements still give one yarn. Every other
-// statement (faces, groups, normals, materials, comments) is ignored.
+// Wavefront OBJ (obj.hpp): one parser for yarn polylines and object meshes. For yarns, a
+// line element that starts at the vertex where the previous one ended continues it, so
+// files that write a polyline as many two-point elements still give one yarn.
 #include <charconv>
 #include <cmath>
+#include <sstream>
 
 #include "knit/io/import.hpp"
+#include "knit/io/obj.hpp"
+#include "knit/util/atomic_file.hpp"
+#include "knit/util/input_file.hpp"
 
 namespace knit {
 namespace {
@@ -38,9 +40,11 @@ std::string_view next_token(std::string_view& s) {
 
 }  // namespace
 
-std::vector<RawYarn> parse_obj(std::string_view data, const std::string& name) {
-  std::vector<Eigen::Vector3d> verts;
-  std::vector<std::vector<LineRef>> polylines;
+ObjGeometry parse_obj_geometry(std::string_view data, const std::string& name) {
+  ObjGeometry g;
+  // indices as written, resolved once every vertex is read (a positive index may point
+  // ahead); each element with the line it came from
+  std::vector<std::vector<LineRef>> lines, faces;
   size_t line_no = 0, pos = 0;
   while (pos < data.size()) {
     size_t end = data.find('\n', pos);
@@ -62,11 +66,12 @@ std::vector<RawYarn> parse_obj(std::string_view data, const std::string& name) {
         if (tok.empty() || res.ec != std::errc() || res.ptr != tok.data() + tok.size() ||
             !std::isfinite(value))
           obj_fail(name, line_no, line_offset,
-                   "vertex needs 3 finite numbers, got '" + std::string(line) + "'");
+                   "vertex needs 3 finite numbers, got '" + printable(line, 80) + "'");
         p[c] = value;
       }
-      verts.push_back(p);
-    } else if (key == "l") {
+      g.vertices.push_back(p);
+    } else if (key == "l" || key == "f") {
+      const bool face = key == "f";
       std::vector<LineRef> refs;
       for (std::string_view tok = next_token(rest); !tok.empty(); tok = next_token(rest)) {
         const std::string_view idx = tok.substr(0, tok.find('/'));
@@ -75,44 +80,80 @@ std::vector<RawYarn> parse_obj(std::string_view data, const std::string& name) {
         if (idx.empty() || res.ec != std::errc() || res.ptr != idx.data() + idx.size() ||
             value == 0)
           obj_fail(name, line_no, line_offset,
-                   "bad vertex index '" + std::string(tok) + "' in line element");
-        refs.push_back({value, static_cast<long long>(verts.size()), line_no});
+                   "bad vertex index '" + printable(tok, 40) + "' in " +
+                       (face ? "face" : "line element"));
+        refs.push_back({value, static_cast<long long>(g.vertices.size()), line_no});
       }
-      if (refs.size() < 2)
+      if (!face && refs.size() < 2)
         obj_fail(name, line_no, line_offset, "line element needs at least 2 vertices");
-      polylines.push_back(std::move(refs));
+      if (face && refs.size() < 3)
+        obj_fail(name, line_no, line_offset, "a face needs at least three corners");
+      (face ? faces : lines).push_back(std::move(refs));
     }
   }
-  if (polylines.empty())
-    throw std::runtime_error(name + ": no polylines ('l' elements) in the OBJ file");
-
-  // resolve indices and join continuing elements
-  const long long nv = static_cast<long long>(verts.size());
-  std::vector<std::vector<long long>> chains;
-  for (const auto& refs : polylines) {
+  const long long nv = static_cast<long long>(g.vertices.size());
+  auto resolve = [&](const std::vector<LineRef>& refs) {
     std::vector<long long> ids;
     for (const LineRef& r : refs) {
       const long long i = r.index > 0 ? r.index - 1 : r.nverts + r.index;
       if (i < 0 || i >= nv)
         throw std::runtime_error(name + ": line " + std::to_string(r.line) + ": vertex index " +
-                                 std::to_string(r.index) + " out of range (" + std::to_string(nv) +
-                                 " vertices)");
+                                 std::to_string(r.index) + " out of range (" +
+                                 std::to_string(nv) + " vertices)");
       ids.push_back(i);
     }
+    return ids;
+  };
+  for (const auto& refs : lines) g.lines.push_back(resolve(refs));
+  for (const auto& refs : faces) g.faces.push_back(resolve(refs));
+  return g;
+}
+
+std::vector<RawYarn> parse_obj(std::string_view data, const std::string& name) {
+  const ObjGeometry g = parse_obj_geometry(data, name);
+  if (g.lines.empty())
+    throw std::runtime_error(name + ": no polylines ('l' elements) in the OBJ file");
+  // an element that starts where the previous one ended continues it
+  std::vector<std::vector<long long>> chains;
+  for (const std::vector<long long>& ids : g.lines) {
     if (!chains.empty() && chains.back().back() == ids.front())
       chains.back().insert(chains.back().end(), ids.begin() + 1, ids.end());
     else
-      chains.push_back(std::move(ids));
+      chains.push_back(ids);
   }
   std::vector<RawYarn> out;
   for (const auto& ids : chains) {
     RawYarn y;
     y.points.resize(3, static_cast<Eigen::Index>(ids.size()));
     for (size_t k = 0; k < ids.size(); ++k)
-      y.points.col(static_cast<Eigen::Index>(k)) = verts[ids[k]];
+      y.points.col(static_cast<Eigen::Index>(k)) = g.vertices[ids[k]];
     out.push_back(std::move(y));
   }
   return out;
+}
+
+TriangleMesh read_obj_mesh(const std::string& path, double scale) {
+  const ObjGeometry g =
+      parse_obj_geometry(read_input_file(path, MAX_GEOMETRY_BYTES, "mesh"), path);
+  if (g.faces.empty()) throw std::runtime_error(path + ": the mesh has no faces ('f' statements)");
+  TriangleMesh mesh;
+  for (const Eigen::Vector3d& v : g.vertices) mesh.vertices.push_back(scale * v);
+  for (const std::vector<long long>& f : g.faces)
+    for (size_t k = 1; k + 1 < f.size(); ++k)
+      mesh.triangles.emplace_back(static_cast<int>(f[0]), static_cast<int>(f[k]),
+                                  static_cast<int>(f[k + 1]));
+  return mesh;
+}
+
+void write_obj_mesh(const TriangleMesh& mesh, const std::string& path) {
+  std::ostringstream out;
+  out.precision(6);
+  out << "# knitsim object surface (cm)\n";
+  for (const Eigen::Vector3d& v : mesh.vertices)
+    out << "v " << v[0] << ' ' << v[1] << ' ' << v[2] << '\n';
+  for (const Eigen::Vector3i& t : mesh.triangles)
+    out << "f " << t[0] + 1 << ' ' << t[1] + 1 << ' ' << t[2] + 1 << '\n';
+  write_file_atomic(path, out.str());
 }
 
 }  // namespace knit

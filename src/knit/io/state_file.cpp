@@ -5,6 +5,7 @@
 #include "knit/util/input_file.hpp"
 #include "knit/util/run_dir.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -35,6 +36,13 @@ uint32_t checksum(std::string_view bytes) {
     crc = crc32(crc, reinterpret_cast<const Bytef*>(bytes.data() + pos), static_cast<uInt>(n));
   }
   return static_cast<uint32_t>(crc);
+}
+
+std::string join_names(const std::vector<std::string>& names) {
+  std::string text;
+  for (size_t k = 0; k < names.size(); ++k)
+    text += (k == 0 ? "" : k + 1 == names.size() ? " or " : ", ") + ("\"" + names[k] + "\"");
+  return text;
 }
 
 // the settings a relaxation wrote, each within the range its option takes; throws
@@ -78,22 +86,29 @@ KnitRelaxSettings parse_relaxation(const nlohmann::json& j) {
   };
   KnitRelaxSettings s;
   s.fire = boolean("fire");
-  if (!value("integrator").is_string()) fail("integrator", "not a string");
-  try {
-    s.integrator = parse_integrator(value("integrator").get<std::string>());
-  } catch (const std::invalid_argument& e) {
-    fail("integrator", e.what());
+  for (const std::string& name : relax_setting_params()) {
+    const ParamDecl& d = param_decl(name);
+    const char* key = d.name;
+    switch (d.type) {
+      case ParamType::BOOLEAN:
+        d.set(s.params, boolean(key) ? 1 : 0);
+        break;
+      case ParamType::CHOICE: {
+        if (!value(key).is_string()) fail(key, "not a string");
+        const std::vector<std::string>& names = d.choices();
+        const auto it = std::find(names.begin(), names.end(), value(key).get<std::string>());
+        if (it == names.end()) fail(key, "not one of " + join_names(names));
+        d.set(s.params, static_cast<double>(it - names.begin()));
+        break;
+      }
+      case ParamType::INTEGER:
+        d.set(s.params, integer_param(key));
+        break;
+      case ParamType::REAL:
+        d.set(s.params, param(key, number(key)));
+        break;
+    }
   }
-  s.time_step = param("time_step", number("time_step"));
-  s.implicit_bending = boolean("implicit_bending");
-  s.contact_solve_tolerance = param("contact_solve_tolerance", number("contact_solve_tolerance"));
-  s.contact_reuse = param("contact_reuse", number("contact_reuse"));
-  s.max_step_halvings = integer_param("max_step_halvings");
-  s.contact_points = integer_param("contact_points");
-  s.end_mass_floor = param("end_mass_floor", number("end_mass_floor"));
-  s.k_global = param("k_global", number("k_global"));
-  s.alpha_small = param("alpha_small", number("alpha_small"));
-  s.alpha_large = param("alpha_large", number("alpha_large"));
   s.ke_per_length = at_least("ke_per_length", 0, true);
   s.force_residual = at_least("force_residual", 0, false);
   if (!value("check_every").is_number_integer()) fail("check_every", "not an integer");
@@ -109,23 +124,15 @@ KnitRelaxSettings parse_relaxation(const nlohmann::json& j) {
 }  // namespace
 
 nlohmann::json to_json(const KnitRelaxSettings& s) {
-  return {{"fire", s.fire},
-          {"integrator", integrator_name(s.integrator)},
-          {"time_step", s.time_step},
-          {"implicit_bending", s.implicit_bending},
-          {"contact_solve_tolerance", s.contact_solve_tolerance},
-          {"contact_reuse", s.contact_reuse},
-          {"max_step_halvings", s.max_step_halvings},
-          {"contact_points", s.contact_points},
-          {"end_mass_floor", s.end_mass_floor},
-          {"k_global", s.k_global},
-          {"alpha_small", s.alpha_small},
-          {"alpha_large", s.alpha_large},
-          {"ke_per_length", s.ke_per_length},
-          {"force_residual", s.force_residual},
-          {"check_every", s.check_every},
-          {"contact_reuse_widen", s.contact_reuse_widen},
-          {"contact_reuse_widen_residual", s.contact_reuse_widen_residual}};
+  nlohmann::json j = {{"fire", s.fire},
+                      {"ke_per_length", s.ke_per_length},
+                      {"force_residual", s.force_residual},
+                      {"check_every", s.check_every},
+                      {"contact_reuse_widen", s.contact_reuse_widen},
+                      {"contact_reuse_widen_residual", s.contact_reuse_widen_residual}};
+  for (const std::string& name : relax_setting_params())
+    j[name] = param_json(param_decl(name), s.params);
+  return j;
 }
 
 int StateFile::num_cp() const {

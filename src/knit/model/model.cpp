@@ -164,6 +164,14 @@ Model ModelBuilder::build(const Params& params, double rest_scale) const {
   return m;
 }
 
+const std::vector<std::string>& relax_setting_params() {
+  static const std::vector<std::string> names = {
+      "integrator",       "time_step",      "implicit_bending", "contact_solve_tolerance",
+      "contact_reuse",    "max_step_halvings", "contact_points", "end_mass_floor",
+      "k_global",         "alpha_small",    "alpha_large"};
+  return names;
+}
+
 void apply_end_mass_floor(Model& m, double fraction) {
   if (!(fraction > 0)) return;
   for (const YarnInfo& y : m.yarns) {

@@ -110,22 +110,19 @@ struct Clamp {
 /// goes on the same way unless told otherwise.
 struct KnitRelaxSettings {
   bool fire = false;  ///< minimisation (FIRE) instead of damped dynamics
-  Integrator integrator = Integrator::EXPLICIT;
-  double time_step = 0;  ///< s
-  bool implicit_bending = false;
-  double contact_solve_tolerance = 0;
-  double contact_reuse = 0;  ///< yarn radii
-  int max_step_halvings = 0;
-  int contact_points = 0;     ///< per segment
-  double end_mass_floor = 0;  ///< of an interior control point's mass
-  double k_global = 0;        ///< g/s, as asked (a FIRE relaxation runs with none)
-  double alpha_small = 0, alpha_large = 0;
+  /// The relaxation's parameters, as asked (k_global too, though a FIRE relaxation runs
+  /// with none); a state records those relax_setting_params() names.
+  Params params;
   double ke_per_length = 0;   ///< erg/cm: the kinetic-energy rest threshold
   double force_residual = 0;  ///< cm/s²: the force-residual rest threshold (0: the method's)
   int check_every = 0;        ///< steps between rest checks
   double contact_reuse_widen = 1;
   double contact_reuse_widen_residual = 0;  ///< cm/s²
 };
+
+/// The parameters (params.def names) a relaxation records in the states it writes: its
+/// solver, sampling and damping, which `relax --resume` takes up again.
+const std::vector<std::string>& relax_setting_params();
 
 /// Where a model's yarn came from when it is a generated knit: enough to rebuild the same
 /// knit or to go on relaxing it (written into .kstate files with the rest lengths and

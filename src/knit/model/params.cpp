@@ -1,44 +1,114 @@
 #include "knit/model/params.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <stdexcept>
+#include <type_traits>
 
 namespace knit {
 
-const std::vector<ParamRange>& param_ranges() {
-  // wide enough for any yarn a user may model, narrow enough that a typo (1e30, a
-  // negative stiffness) is caught before it turns into a run that blows up
-  static const std::vector<ParamRange> ranges = {
-      {"radius", 1e-3, 10, "cm"},
-      {"density", 1e-6, 100, "g/cm"},
-      {"k_len", 0, 1e9, "g cm²/s²"},
-      {"k_bend", 0, 1e6, "g cm³/s²"},
-      {"k_global", 0, 1e6, "g/s"},
-      {"k_contact", 0, 1e9, "g/s²"},
-      {"k_dt", 0, 1e6, "g/(cm² s)"},
-      {"k_dn", 0, 1e6, "g/(cm² s)"},
-      {"alpha_small", 0, 1, ""},
-      {"alpha_large", 0, 1, ""},
-      {"yarn_friction", 0, 10, ""},
-      {"quadrature_points", 3, 101, "points per segment"},
-      {"contact_points", 1, 64, "points per segment"},
-      {"end_mass_floor", 0, 1, "of an interior control point's mass"},
-      {"time_step", 1e-8, 1e-2, "s"},
-      {"contact_solve_tolerance", 0, 1, ""},
-      {"contact_reuse", 0, 1, "yarn radii"},
-      {"constraint_tolerance", 1e-12, 1, ""},
-      {"max_projection_iterations", 1, 10000, ""},
-      {"max_step_halvings", 0, 20, "halvings of the time step"},
-  };
-  return ranges;
+namespace {
+
+template <typename T>
+constexpr ParamType param_type() {
+  if constexpr (std::is_same_v<T, bool>) return ParamType::BOOLEAN;
+  else if constexpr (std::is_enum_v<T>) return ParamType::CHOICE;
+  else if constexpr (std::is_integral_v<T>) return ParamType::INTEGER;
+  else return ParamType::REAL;
 }
 
-const ParamRange& param_range(const std::string& name) {
-  for (const ParamRange& r : param_ranges())
-    if (name == r.name) return r;
+template <typename T>
+T from_double(double v) {
+  if constexpr (std::is_same_v<T, bool>) return v != 0;
+  else if constexpr (std::is_enum_v<T>) return static_cast<T>(static_cast<int>(v));
+  else return static_cast<T>(v);
+}
+
+const std::vector<std::string> NO_CHOICES;
+
+}  // namespace
+
+const std::vector<ParamDecl>& param_table() {
+#define KNIT_PARAM_DECL(group, type, name, def, lo, hi, unit, doc)                  \
+  ParamDecl{#name,                                                                \
+            #group,                                                               \
+            param_type<type>(),                                                   \
+            static_cast<double>(lo),                                              \
+            static_cast<double>(hi),                                              \
+            unit,                                                                 \
+            doc,                                                                  \
+            [](const Params& p) { return static_cast<double>(p.group.name); },    \
+            [](Params& p, double v) { p.group.name = from_double<type>(v); }},
+  static const std::vector<ParamDecl> table = {
+#define KNIT_MATERIAL(type, name, def, lo, hi, unit, doc) \
+  KNIT_PARAM_DECL(material, type, name, def, lo, hi, unit, doc)
+#define KNIT_DISCRETISATION(type, name, def, lo, hi, unit, doc) \
+  KNIT_PARAM_DECL(discretisation, type, name, def, lo, hi, unit, doc)
+#define KNIT_SOLVER(type, name, def, lo, hi, unit, doc) \
+  KNIT_PARAM_DECL(solver, type, name, def, lo, hi, unit, doc)
+#include "knit/model/params.def"
+  };
+#undef KNIT_PARAM_DECL
+  return table;
+}
+
+const ParamDecl& param_decl(const std::string& name) {
+  for (const ParamDecl& d : param_table())
+    if (name == d.name) return d;
   throw std::out_of_range("no parameter named " + name);
+}
+
+const std::vector<std::string>& ParamDecl::choices() const {
+  // the one choice today: the integrator
+  return type == ParamType::CHOICE ? integrator_names() : NO_CHOICES;
+}
+
+std::string ParamDecl::text(const Params& p) const {
+  const double v = get(p);
+  switch (type) {
+    case ParamType::BOOLEAN:
+      return v != 0 ? "true" : "false";
+    case ParamType::CHOICE:
+      return choices().at(static_cast<size_t>(v));
+    case ParamType::INTEGER:
+      return std::to_string(static_cast<long long>(v));
+    case ParamType::REAL:
+      break;
+  }
+  return short_number(v);
+}
+
+std::string ParamDecl::default_text() const {
+  return text(Params{});
+}
+
+std::string ParamDecl::option() const {
+  std::string o = std::string("--") + name;
+  std::replace(o.begin(), o.end(), '_', '-');
+  return o;
+}
+
+nlohmann::json param_json(const ParamDecl& d, const Params& p) {
+  switch (d.type) {
+    case ParamType::INTEGER:
+      return static_cast<long long>(d.get(p));
+    case ParamType::BOOLEAN:
+      return d.get(p) != 0;
+    case ParamType::CHOICE:
+      return d.text(p);
+    case ParamType::REAL:
+      break;
+  }
+  return d.get(p);
+}
+
+ParamRange param_range(const std::string& name) {
+  const ParamDecl& d = param_decl(name);
+  if (d.type == ParamType::BOOLEAN || d.type == ParamType::CHOICE)
+    throw std::out_of_range(name + " is not a number: it has no range");
+  return {d.name, d.min, d.max, d.unit};
 }
 
 std::string short_number(double x) {
@@ -68,7 +138,7 @@ std::string time_left_text(double from, double to, double step) {
 }
 
 void check_param(const std::string& name, double value) {
-  const ParamRange& r = param_range(name);
+  const ParamRange r = param_range(name);
   if (std::isfinite(value) && value >= r.min && value <= r.max) return;
   std::string unit = r.unit[0] ? std::string(" ") + r.unit : std::string();
   throw std::invalid_argument(name + " = " + short_number(value) + " is " +
@@ -89,35 +159,16 @@ void check_duration(double duration, double time_step) {
 }
 
 void validate_params(const Params& p) {
-  const Material& m = p.material;
-  check_param("radius", m.radius);
-  check_param("density", m.density);
-  check_param("k_len", m.k_len);
-  check_param("k_bend", m.k_bend);
-  check_param("k_global", m.k_global);
-  check_param("k_contact", m.k_contact);
-  check_param("k_dt", m.k_dt);
-  check_param("k_dn", m.k_dn);
-  check_param("alpha_small", m.alpha_small);
-  check_param("alpha_large", m.alpha_large);
-  check_param("yarn_friction", m.yarn_friction);
-  check_param("quadrature_points", p.discretisation.quadrature_points);
+  for (const ParamDecl& d : param_table())
+    if (d.type == ParamType::REAL || d.type == ParamType::INTEGER) check_param(d.name, d.get(p));
   if (p.discretisation.quadrature_points % 2 == 0)
     throw std::invalid_argument(
         "quadrature_points = " + std::to_string(p.discretisation.quadrature_points) +
         " must be odd (Simpson's rule)");
-  check_param("contact_points", p.discretisation.contact_points);
-  check_param("end_mass_floor", p.discretisation.end_mass_floor);
-  check_param("time_step", p.solver.time_step);
-  check_param("contact_solve_tolerance", p.solver.contact_solve_tolerance);
-  check_param("contact_reuse", p.solver.contact_reuse);
   if (p.solver.contact_reuse > 0 && p.solver.integrator != Integrator::IMEX_CONTACT)
     throw std::invalid_argument("contact_reuse = " + short_number(p.solver.contact_reuse) +
                                 " needs the imex-contact integrator (its contact stiffness is "
                                 "the linearisation reused)");
-  check_param("constraint_tolerance", p.solver.constraint_tolerance);
-  check_param("max_projection_iterations", p.solver.max_projection_iterations);
-  check_param("max_step_halvings", p.solver.max_step_halvings);
   for (int c = 0; c < 3; ++c)
     if (!std::isfinite(p.gravity[c]) || std::abs(p.gravity[c]) > 1e5)
       throw std::invalid_argument("gravity[" + std::to_string(c) +

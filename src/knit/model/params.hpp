@@ -6,40 +6,23 @@
 //   SolverSettings  how time is stepped: time step, constraints, tolerances
 // Gravity belongs to the scene the yarn is in and sits beside the three groups.
 #include <Eigen/Core>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
 namespace knit {
 
-/// The yarn's physical properties (MODEL.md §8).
+/// The yarn's physical properties (MODEL.md §8): its fields, defaults, units and ranges
+/// are the KNIT_MATERIAL lines of params.def.
 struct Material {
-  double radius = 0.125;       ///< yarn radius r (cm)
-  double density = 0.006;      ///< mass per unit length μ (g/cm)
-  double k_len = 2000;         ///< length energy stiffness (g cm²/s²)
-  double k_bend = 5;           ///< bending stiffness (g cm³/s²)
-  double k_global = 0;         ///< global (mass-proportional) damping (g/s)
-  double k_contact = 3250;     ///< yarn–yarn contact stiffness (erg/cm² = g/s²)
-  double k_dt = 0.003;         ///< tangential contact damping (g/(cm² s))
-  double k_dn = 0.03;          ///< normal contact damping (g/(cm² s))
-  double alpha_small = 0.675;  ///< non-rigid damping, small regions ∈ [0,1] per step of
-                               ///< 1/11800 s (a rate: per_step_strength)
-  double alpha_large = 0.3;    ///< non-rigid damping, large regions, the same
-  bool contact = true;         ///< yarn–yarn contact on/off
-  /// yarn–yarn Coulomb friction coefficient μ (filters/yarn_friction.hpp; not in the
-  /// paper's model, whose only friction is the viscous contact damping): 0 = off
-  double yarn_friction = 0;
+#define KNIT_MATERIAL(type, name, def, min, max, unit, doc) type name = def;
+#include "knit/model/params.def"
 };
 
-/// Sampling of each spline segment.
+/// Sampling of each spline segment: the KNIT_DISCRETISATION lines of params.def.
 struct Discretisation {
-  int quadrature_points = 11;  ///< Simpson points per segment for the energies (odd)
-  int contact_points = 10;     ///< contact quadrature points per segment (MODEL.md §8: 10–20)
-  /// The two control points at each end of a yarn get at least this fraction of the mean
-  /// lumped mass of its interior control points. 0 (the default) keeps MODEL.md's row sums,
-  /// which give a yarn's last control point 1/24 of an interior one's and the one before
-  /// it 1/2: an artefact of the lumping that bounds the explicit step where an end is free
-  /// and undamped (docs/model.md §2). 0.5 adds about half a segment's mass at each end.
-  double end_mass_floor = 0;
+#define KNIT_DISCRETISATION(type, name, def, min, max, unit, doc) type name = def;
+#include "knit/model/params.def"
 };
 
 /// How a step integrates the forces before the projection and the filters:
@@ -65,33 +48,10 @@ const std::vector<std::string>& integrator_names();
 /// The integrator named `name`; throws std::invalid_argument naming the known ones.
 Integrator parse_integrator(const std::string& name);
 
-/// Time stepping and constraint projection.
+/// Time stepping and constraint projection: the KNIT_SOLVER lines of params.def.
 struct SolverSettings {
-  double time_step = 1.0 / 11800;  ///< h (s), MODEL.md §8
-  Integrator integrator = Integrator::EXPLICIT;
-  /// With IMEX or IMEX_CONTACT, the bending energy implicit too (its Hessian made
-  /// positive semidefinite, bending_hessian, in the band solve): explicit bending bounds
-  /// imex-contact's step (1.6e-3 s with k_bend = 5 on a 42×32 knit; 3.2e-3 s with it).
-  bool implicit_bending = false;
-  /// With IMEX_CONTACT: 0 (the default) solves each step once with the band factor, which
-  /// holds the contact stiffness on each segment's own control points, and takes the
-  /// contact coupling between segments at the step's start velocity (−h² K_c v on the
-  /// right-hand side); > 0 solves the whole linear system by conjugate gradients until the
-  /// residual is this fraction of the right-hand side (docs/model.md §5.2).
-  double contact_solve_tolerance = 0;
-  /// With IMEX_CONTACT: > 0 reuses an exact contact evaluation's linearisation while every
-  /// control point stays within this many yarn radii of where it was evaluated
-  /// (ContactTerm::add_force); 0 (the default) evaluates contact afresh every step.
-  double contact_reuse = 0;
-  bool length_constraints = true;      ///< enforce C_i = 0 by projection (off in relaxation)
-  double constraint_tolerance = 1e-6;  ///< projection stops when max |C| is below (C_len is
-                                       ///< dimensionless, pin/glue/clamp rows in cm)
-  int max_projection_iterations = 20;
-  /// A step that fails (unstable, non-finite, projection not converged) is taken again
-  /// from where it started in two halves, and so on, up to this many halvings (h / 2ⁿ);
-  /// the halved step is kept for a while before the step tries h again (the runner,
-  /// runner.hpp). 0 (the default) stops the run at the first failed step.
-  int max_step_halvings = 0;
+#define KNIT_SOLVER(type, name, def, min, max, unit, doc) type name = def;
+#include "knit/model/params.def"
 };
 
 struct Params {
@@ -116,25 +76,54 @@ struct Params {
   }
 };
 
-/// The working range of a numeric parameter: every value knitsim accepts is finite and
-/// inside it (inclusive). Scene files, the command line and the Python module check
-/// against these ranges before anything runs.
+/// What a parameter holds.
+enum class ParamType { REAL, INTEGER, BOOLEAN, CHOICE };
+
+/// One parameter as params.def declares it. Values pass through as doubles (an integer
+/// as itself, a boolean as 0 or 1, a choice as its index in `choices`).
+struct ParamDecl {
+  const char* name;   ///< the field, the key in a scene's "params" and the summary's
+  const char* group;  ///< "material", "discretisation" or "solver"
+  ParamType type;
+  double min, max;    ///< the working range, inclusive (numbers only)
+  const char* unit;   ///< "" when dimensionless
+  const char* doc;    ///< one line
+  double (*get)(const Params&);
+  void (*set)(Params&, double);
+  /// the names a choice takes, in index order (empty for other types)
+  const std::vector<std::string>& choices() const;
+  /// The value `p` holds, as a scene or summary writes it (a number, true/false, a name).
+  std::string text(const Params& p) const;
+  /// The default (Params{}'s value) as text.
+  std::string default_text() const;
+  /// The option that sets it on the command line: "--" and the name with '-' for '_'.
+  std::string option() const;
+};
+
+/// The value of `d` in `p` as JSON: a number (an integer as one), true/false, or a choice's
+/// name, as scenes, summaries and state files write it.
+nlohmann::json param_json(const ParamDecl& d, const Params& p);
+
+/// Every parameter, in params.def's order.
+const std::vector<ParamDecl>& param_table();
+/// The parameter `name`; throws std::out_of_range for an unknown name.
+const ParamDecl& param_decl(const std::string& name);
+
+/// The working range of a numeric parameter (a view of its declaration, for front ends
+/// that check a value before it is set).
 struct ParamRange {
-  const char* name;  ///< the key in a scene's "params" (and, with '-', the option name)
+  const char* name;
   double min, max;
   const char* unit;
 };
-
-/// Every numeric parameter's range, in the order of the structs above.
-const std::vector<ParamRange>& param_ranges();
 /// The range of parameter `name`; throws std::out_of_range for an unknown name.
-const ParamRange& param_range(const std::string& name);
+ParamRange param_range(const std::string& name);
 
 /// Throws std::invalid_argument naming `name`, its value and its range when `value` is not
 /// finite or outside param_range(name).
 void check_param(const std::string& name, double value);
 
-/// Checks every field of `p` (see param_ranges(); quadrature_points must also be odd,
+/// Checks every field of `p` (see param_table(); quadrature_points must also be odd,
 /// gravity finite and at most 1e5 cm/s² per axis); throws std::invalid_argument naming the
 /// first bad field.
 void validate_params(const Params& p);

@@ -14,8 +14,6 @@
 #include <unordered_map>
 
 #include "knit/model/params.hpp"
-#include "knit/util/atomic_file.hpp"
-#include "knit/util/input_file.hpp"
 
 namespace knit {
 
@@ -26,13 +24,6 @@ void init_openvdb() {
   std::call_once(once, [] { openvdb::initialize(); });
 }
 
-// the next whitespace-separated token of `line` from `pos`
-std::string_view token(std::string_view line, size_t& pos) {
-  while (pos < line.size() && (line[pos] == ' ' || line[pos] == '\t' || line[pos] == '\r')) ++pos;
-  const size_t start = pos;
-  while (pos < line.size() && line[pos] != ' ' && line[pos] != '\t' && line[pos] != '\r') ++pos;
-  return line.substr(start, pos - start);
-}
 
 class MeshShape : public Shape {
  public:
@@ -89,56 +80,6 @@ class MeshShape : public Shape {
 
 }  // namespace
 
-TriangleMesh read_obj_mesh(const std::string& path, double scale) {
-  const std::string text = read_input_file(path, MAX_GEOMETRY_BYTES, "mesh");
-  TriangleMesh mesh;
-  size_t line_start = 0;
-  long long line_no = 0;
-  auto fail = [&](const std::string& what) {
-    throw std::runtime_error(path + ":" + std::to_string(line_no) + ": " + what);
-  };
-  while (line_start < text.size()) {
-    size_t end = text.find('\n', line_start);
-    if (end == std::string::npos) end = text.size();
-    const std::string_view line(text.data() + line_start, end - line_start);
-    line_start = end + 1;
-    ++line_no;
-    size_t pos = 0;
-    const std::string_view kw = token(line, pos);
-    if (kw == "v") {
-      Eigen::Vector3d p;
-      for (int k = 0; k < 3; ++k) {
-        const std::string t(token(line, pos));
-        char* stop = nullptr;
-        p[k] = std::strtod(t.c_str(), &stop);
-        if (t.empty() || *stop != '\0' || !std::isfinite(p[k]))
-          fail("expected three finite coordinates after 'v'");
-      }
-      mesh.vertices.push_back(scale * p);
-    } else if (kw == "f") {
-      std::vector<int> corners;
-      for (std::string_view t = token(line, pos); !t.empty(); t = token(line, pos)) {
-        const std::string first(t.substr(0, t.find('/')));
-        char* stop = nullptr;
-        const long long idx = std::strtoll(first.c_str(), &stop, 10);
-        if (first.empty() || *stop != '\0' || idx == 0)
-          fail("bad face index '" + std::string(t) + "'");
-        const long long n = static_cast<long long>(mesh.vertices.size());
-        const long long k = idx > 0 ? idx - 1 : n + idx;
-        if (k < 0 || k >= n)
-          fail("face index " + std::to_string(idx) + " refers to a vertex that does not exist (" +
-               std::to_string(n) + " so far)");
-        corners.push_back(static_cast<int>(k));
-      }
-      if (corners.size() < 3) fail("a face needs at least three corners");
-      for (size_t k = 1; k + 1 < corners.size(); ++k)
-        mesh.triangles.emplace_back(corners[0], corners[k], corners[k + 1]);
-    }
-  }
-  if (mesh.triangles.empty())
-    throw std::runtime_error(path + ": the mesh has no faces ('f' statements)");
-  return mesh;
-}
 
 long long open_edges(const TriangleMesh& mesh) {
   std::unordered_map<unsigned long long, int> count;
@@ -272,15 +213,5 @@ TriangleMesh object_surface(const SceneObject& object, double time,
   return mesh;
 }
 
-void write_obj_mesh(const TriangleMesh& mesh, const std::string& path) {
-  std::ostringstream out;
-  out.precision(6);
-  out << "# knitsim object surface (cm)\n";
-  for (const Eigen::Vector3d& v : mesh.vertices)
-    out << "v " << v[0] << ' ' << v[1] << ' ' << v[2] << '\n';
-  for (const Eigen::Vector3i& t : mesh.triangles)
-    out << "f " << t[0] + 1 << ' ' << t[1] + 1 << ' ' << t[2] + 1 << '\n';
-  write_file_atomic(path, out.str());
-}
 
 }  // namespace knit

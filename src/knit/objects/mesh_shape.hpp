@@ -23,13 +23,6 @@ struct TriangleMesh {
   std::vector<Eigen::Vector3i> triangles;
 };
 
-/// Reads the `v` and `f` statements of a Wavefront OBJ file (faces with more than three
-/// corners are split into triangles around their first corner; `v/vt/vn` and negative
-/// indices are understood; other statements are ignored), multiplying coordinates by
-/// `scale`. Throws std::runtime_error naming the file and line for a malformed statement,
-/// an index out of range, or a file without faces.
-TriangleMesh read_obj_mesh(const std::string& path, double scale = 1.0);
-
 /// Number of edges of `mesh` that are not shared by exactly two triangles (0: closed).
 long long open_edges(const TriangleMesh& mesh);
 
@@ -56,7 +49,5 @@ TriangleMesh surface_mesh(const Shape& shape, const Eigen::AlignedBox3d& region,
 TriangleMesh object_surface(const SceneObject& object, double time,
                             const Eigen::AlignedBox3d& world_region, double voxel = 0);
 
-/// Writes `mesh` as a Wavefront OBJ (`v` and `f` lines) atomically.
-void write_obj_mesh(const TriangleMesh& mesh, const std::string& path);
 
 }  // namespace knit

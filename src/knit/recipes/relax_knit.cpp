@@ -184,18 +184,7 @@ State read_resumed_knit_state(const std::string& path, const std::string& patter
 KnitRelaxSettings relax_settings(const RelaxKnitOptions& o) {
   KnitRelaxSettings s;
   s.fire = o.fire;
-  const SolverSettings& solver = o.params.solver;
-  s.integrator = solver.integrator;
-  s.time_step = solver.time_step;
-  s.implicit_bending = solver.implicit_bending;
-  s.contact_solve_tolerance = solver.contact_solve_tolerance;
-  s.contact_reuse = solver.contact_reuse;
-  s.max_step_halvings = solver.max_step_halvings;
-  s.contact_points = o.params.discretisation.contact_points;
-  s.end_mass_floor = o.params.discretisation.end_mass_floor;
-  s.k_global = o.params.material.k_global;
-  s.alpha_small = o.params.material.alpha_small;
-  s.alpha_large = o.params.material.alpha_large;
+  s.params = o.params;
   s.ke_per_length = o.run.ke_per_length;
   s.force_residual = o.run.force_residual;
   s.check_every = o.run.check_every;
@@ -206,18 +195,10 @@ KnitRelaxSettings relax_settings(const RelaxKnitOptions& o) {
 
 void apply_relax_settings(const KnitRelaxSettings& s, RelaxKnitOptions& o) {
   o.fire = s.fire;
-  SolverSettings& solver = o.params.solver;
-  solver.integrator = s.integrator;
-  solver.time_step = s.time_step;
-  solver.implicit_bending = s.implicit_bending;
-  solver.contact_solve_tolerance = s.contact_solve_tolerance;
-  solver.contact_reuse = s.contact_reuse;
-  solver.max_step_halvings = s.max_step_halvings;
-  o.params.discretisation.contact_points = s.contact_points;
-  o.params.discretisation.end_mass_floor = s.end_mass_floor;
-  o.params.material.k_global = s.k_global;
-  o.params.material.alpha_small = s.alpha_small;
-  o.params.material.alpha_large = s.alpha_large;
+  for (const std::string& name : relax_setting_params()) {
+    const ParamDecl& d = param_decl(name);
+    d.set(o.params, d.get(s.params));
+  }
   o.run.ke_per_length = s.ke_per_length;
   o.run.force_residual = s.force_residual;
   o.run.check_every = s.check_every;

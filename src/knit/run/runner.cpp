@@ -114,35 +114,13 @@ double next_step_length(double time, double end_time, double h) {
 }
 
 nlohmann::json params_json(const Params& p) {
-  const Material& m = p.material;
-  return {{"material",
-           {{"radius", m.radius},
-            {"density", m.density},
-            {"k_len", m.k_len},
-            {"k_bend", m.k_bend},
-            {"k_global", m.k_global},
-            {"k_contact", m.k_contact},
-            {"k_dt", m.k_dt},
-            {"k_dn", m.k_dn},
-            {"alpha_small", m.alpha_small},
-            {"alpha_large", m.alpha_large},
-            {"yarn_friction", m.yarn_friction},
-            {"contact", m.contact}}},
-          {"discretisation",
-           {{"quadrature_points", p.discretisation.quadrature_points},
-            {"contact_points", p.discretisation.contact_points},
-            {"end_mass_floor", p.discretisation.end_mass_floor}}},
-          {"solver",
-           {{"time_step", p.solver.time_step},
-            {"integrator", integrator_name(p.solver.integrator)},
-            {"implicit_bending", p.solver.implicit_bending},
-            {"contact_solve_tolerance", p.solver.contact_solve_tolerance},
-            {"contact_reuse", p.solver.contact_reuse},
-            {"length_constraints", p.solver.length_constraints},
-            {"constraint_tolerance", p.solver.constraint_tolerance},
-            {"max_projection_iterations", p.solver.max_projection_iterations},
-            {"max_step_halvings", p.solver.max_step_halvings}}},
-          {"gravity", vec_json(p.gravity)}};
+  // grouped as params.def declares them
+  nlohmann::json j = {{"material", nlohmann::json::object()},
+                      {"discretisation", nlohmann::json::object()},
+                      {"solver", nlohmann::json::object()}};
+  for (const ParamDecl& d : param_table()) j[d.group][d.name] = param_json(d, p);
+  j["gravity"] = vec_json(p.gravity);
+  return j;
 }
 
 const char* knitsim_version() {

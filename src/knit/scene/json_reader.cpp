@@ -85,12 +85,16 @@ void JsonReader::require_array(size_t min_size) const {
 }
 
 void JsonReader::allow_keys(std::initializer_list<const char*> allowed) const {
+  allow_keys(std::vector<std::string>(allowed.begin(), allowed.end()));
+}
+
+void JsonReader::allow_keys(const std::vector<std::string>& allowed) const {
   require_object();
   for (const auto& item : m_value.items()) {
     const std::string& key = item.key();  // a named variable: clang 14 cannot capture bindings
-    if (std::none_of(allowed.begin(), allowed.end(), [&](const char* a) { return key == a; })) {
+    if (std::find(allowed.begin(), allowed.end(), key) == allowed.end()) {
       std::string list;
-      for (const char* a : allowed) list += std::string(list.empty() ? "" : ", ") + a;
+      for (const std::string& a : allowed) list += (list.empty() ? "" : ", ") + a;
       JsonReader(m_value, m_source, m_path.empty() ? key : m_path + "." + key)
           .fail("unknown key (expected one of: " + list + ")");
     }

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace knit {
 
@@ -33,6 +34,7 @@ class JsonReader {
   void require_array(size_t min_size = 0) const;
   /// Throws if the object has keys outside `allowed`, naming the first unknown one.
   void allow_keys(std::initializer_list<const char*> allowed) const;
+  void allow_keys(const std::vector<std::string>& allowed) const;
 
   double number() const;
   /// A finite number > 0 (or ≥ 0 when `allow_zero`).

@@ -354,31 +354,10 @@ Scene parse_scene_file(const nlohmann::json& doc, const std::string& path) {
 }  // namespace
 
 Params parse_params(const JsonReader& r, Params p) {
-  r.allow_keys({"preset",
-                "radius",
-                "density",
-                "k_len",
-                "k_bend",
-                "k_global",
-                "k_contact",
-                "k_dt",
-                "k_dn",
-                "alpha_small",
-                "alpha_large",
-                "yarn_friction",
-                "quadrature_points",
-                "contact_points",
-                "end_mass_floor",
-                "length_constraints",
-                "contact",
-                "constraint_tolerance",
-                "contact_solve_tolerance",
-                "contact_reuse",
-                "max_projection_iterations",
-                "max_step_halvings",
-                "time_step",
-                "integrator",
-                "implicit_bending"});
+  // the keys are the parameter table's (model/params.def) and "preset"
+  std::vector<std::string> keys = {"preset"};
+  for (const ParamDecl& d : param_table()) keys.push_back(d.name);
+  r.allow_keys(keys);
   if (r.has("preset")) {
     const std::string preset = r.at("preset").string();
     if (preset == "simulation")
@@ -388,60 +367,45 @@ Params parse_params(const JsonReader& r, Params p) {
     else
       r.at("preset").fail("expected \"simulation\" or \"relaxation\", got \"" + preset + "\"");
   }
-  if (r.has("radius")) p.material.radius = r.at("radius").positive();
-  if (r.has("density")) p.material.density = r.at("density").positive();
-  if (r.has("k_len")) p.material.k_len = r.at("k_len").positive(true);
-  if (r.has("k_bend")) p.material.k_bend = r.at("k_bend").positive(true);
-  if (r.has("k_global")) p.material.k_global = r.at("k_global").positive(true);
-  if (r.has("k_contact")) p.material.k_contact = r.at("k_contact").positive(true);
-  if (r.has("k_dt")) p.material.k_dt = r.at("k_dt").positive(true);
-  if (r.has("k_dn")) p.material.k_dn = r.at("k_dn").positive(true);
-  if (r.has("yarn_friction")) p.material.yarn_friction = r.at("yarn_friction").positive(true);
-  for (auto [key, dst] : {std::pair{"alpha_small", &p.material.alpha_small},
-                          {"alpha_large", &p.material.alpha_large}}) {
-    if (!r.has(key)) continue;
-    *dst = r.at(key).positive(true);
-    if (*dst > 1) r.at(key).fail("expected a value in [0, 1], got " + short_number(*dst));
-  }
-  if (r.has("quadrature_points")) {
-    p.discretisation.quadrature_points = r.at("quadrature_points").integer(3);
-    if (p.discretisation.quadrature_points % 2 == 0)
-      r.at("quadrature_points")
-          .fail("Simpson's rule needs an odd number of points, got " +
-                std::to_string(p.discretisation.quadrature_points));
-  }
-  if (r.has("contact_points")) p.discretisation.contact_points = r.at("contact_points").integer(1);
-  if (r.has("end_mass_floor"))
-    p.discretisation.end_mass_floor = r.at("end_mass_floor").positive(true);
-  if (r.has("length_constraints"))
-    p.solver.length_constraints = r.at("length_constraints").boolean();
-  if (r.has("contact")) p.material.contact = r.at("contact").boolean();
-  if (r.has("implicit_bending")) p.solver.implicit_bending = r.at("implicit_bending").boolean();
-  if (r.has("contact_solve_tolerance"))
-    p.solver.contact_solve_tolerance = r.at("contact_solve_tolerance").positive(true);
-  if (r.has("contact_reuse")) p.solver.contact_reuse = r.at("contact_reuse").positive(true);
-  if (r.has("constraint_tolerance"))
-    p.solver.constraint_tolerance = r.at("constraint_tolerance").positive();
-  if (r.has("max_projection_iterations"))
-    p.solver.max_projection_iterations = r.at("max_projection_iterations").integer(1);
-  if (r.has("max_step_halvings")) p.solver.max_step_halvings = r.at("max_step_halvings").integer(0);
-  if (r.has("time_step")) p.solver.time_step = r.at("time_step").positive();
-  if (r.has("integrator")) {
-    try {
-      p.solver.integrator = parse_integrator(r.at("integrator").string());
-    } catch (const std::invalid_argument& e) {
-      r.at("integrator").fail(e.what());
-    }
-  }
-  // every field within its working range (params.hpp), named by its key
-  for (const ParamRange& range : param_ranges())
-    if (r.has(range.name)) {
-      try {
-        check_param(range.name, r.at(range.name).number());
-      } catch (const std::invalid_argument& e) {
-        r.at(range.name).fail(e.what());
+  for (const ParamDecl& d : param_table()) {
+    if (!r.has(d.name)) continue;
+    const JsonReader v = r.at(d.name);
+    switch (d.type) {
+      case ParamType::BOOLEAN:
+        d.set(p, v.boolean() ? 1 : 0);
+        continue;
+      case ParamType::CHOICE: {
+        const std::string name = v.string();
+        const std::vector<std::string>& names = d.choices();
+        const auto it = std::find(names.begin(), names.end(), name);
+        if (it == names.end()) {
+          std::string expected;
+          for (size_t k = 0; k < names.size(); ++k)
+            expected += (k == 0 ? "" : k + 1 == names.size() ? " or " : ", ") +
+                        ("\"" + names[k] + "\"");
+          v.fail("expected " + expected + ", got \"" + name + "\"");
+        }
+        d.set(p, static_cast<double>(it - names.begin()));
+        continue;
       }
+      case ParamType::INTEGER:
+        d.set(p, v.integer(static_cast<int>(d.min)));
+        break;
+      case ParamType::REAL:
+        d.set(p, d.min > 0 ? v.positive() : d.min == 0 ? v.positive(true) : v.number());
+        break;
     }
+    // every number within its working range, named by its key
+    try {
+      check_param(d.name, d.get(p));
+    } catch (const std::invalid_argument& e) {
+      v.fail(e.what());
+    }
+  }
+  if (r.has("quadrature_points") && p.discretisation.quadrature_points % 2 == 0)
+    r.at("quadrature_points")
+        .fail("Simpson's rule needs an odd number of points, got " +
+              std::to_string(p.discretisation.quadrature_points));
   return p;
 }
 

@@ -1,3 +1,4 @@
+#include "knit/io/obj.hpp"
 #include "knit/scene/scene_objects.hpp"
 
 #include <cmath>
