@@ -26,7 +26,6 @@ extensions = [
     "breathe",
     "sphinx.ext.autodoc",
     "knit_params",
-    "knit_cpp_api",
 ]
 source_suffix = {".md": "markdown"}
 root_doc = "index"
@@ -53,5 +52,18 @@ autodoc_typehints = "signature"
 # nitpicky (-n): pybind11 signatures and Eigen/std types have no targets of their own
 nitpick_ignore_regex = [
     (r"py:.*", r"(numpy|numpy\..*|Iterator|Sequence|Optional|Union|Callable|object|os\.PathLike|knitsim\..*)"),
-    (r"cpp:.*", r"(std|Eigen|nlohmann|tbb|RTC|openvdb)(::.*)?"),
+    (r"cpp:.*", r"(std|Eigen|nlohmann|tbb|RTC|openvdb)(::.*)?|u?int\d+_t|size_t|ptrdiff_t|StiffSolver::RowMajorMatrix|RowMajorMatrix"),
+    # the SIMD lane helpers (energy/lanes.hpp), left out of the pages (docs/Doxyfile)
+    (r"cpp:.*", r"lanes(::.*)?|VecD|VecL"),
 ]
+
+
+# The module's docstrings are plain text (pybind11), not reStructuredText: escape the
+# characters reST would read as markup (|C| as a substitution, * as emphasis).
+def _plain_docstring(app, what, name, obj, options, lines):
+    for i, line in enumerate(lines):
+        lines[i] = line.replace("\\", "\\\\").replace("|", "\\|").replace("*", "\\*")
+
+
+def setup(app):
+    app.connect("autodoc-process-docstring", _plain_docstring)

@@ -18,7 +18,10 @@ fi
 out=$build_dir/docs
 mkdir -p "$out/doxygen"
 # Doxygen: XML of the headers in src/knit (docs/Doxyfile), any warning fails
+# a fresh XML and a fresh Sphinx environment (Breathe caches the XML files it read)
+rm -rf "$out/doxygen/xml" "$out/doctrees"
 KNIT_DOXYGEN_OUT=$out/doxygen doxygen docs/Doxyfile
+/usr/bin/python3 docs/_ext/strip_file_refs.py "$out/doxygen/xml"
 # Sphinx from Debian's python3 (where its packages are), whatever python3 is first on PATH
 KNIT_BUILD_DIR=$build_dir KNIT_DOXYGEN_XML=$out/doxygen/xml \
   /usr/bin/python3 -m sphinx -b html -W --keep-going -n -q -j auto \
