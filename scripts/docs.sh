@@ -22,6 +22,8 @@ mkdir -p "$out/doxygen"
 rm -rf "$out/doxygen/xml" "$out/doctrees"
 KNIT_DOXYGEN_OUT=$out/doxygen doxygen docs/Doxyfile
 /usr/bin/python3 docs/_ext/strip_file_refs.py "$out/doxygen/xml"
+# the README's links into docs/ (read on GitHub, outside the site)
+/usr/bin/python3 docs/_ext/check_readme_links.py README.md
 # Sphinx from Debian's python3 (where its packages are), whatever python3 is first on PATH
 KNIT_BUILD_DIR=$build_dir KNIT_DOXYGEN_XML=$out/doxygen/xml \
   /usr/bin/python3 -m sphinx -b html -W --keep-going -n -q -j auto \
