@@ -3,7 +3,8 @@
     /usr/bin/python3 examples/python/relax_gauge.py [PATTERN_OR_CHART] [ROWS] [COLS]
 
 PATTERN_OR_CHART: a built-in pattern (stockinette, garter, rib2x2, seed, …) or a chart
-file such as examples/charts/…; default stockinette, 12 × 12.
+file such as tests/data/patterns/rib_and_seed.chart (the chart format: docs/patterns.md);
+default stockinette, 12 × 12.
 """
 import sys
 

@@ -79,7 +79,7 @@ struct StretchOptions {
   bool write_frames = true;
   /// with out_dir and frames: renders of the sample at strains 0, 0.25, 0.5 and 1 (those up
   /// to to_strain, and to_strain itself) side by side in stretch_renders.png (each also as
-  /// renders/strain_<e>.png), and a movie of every frame in movie/animation.mp4
+  /// `renders/strain_<e>.png`), and a movie of every frame in movie/animation.mp4
   bool render = true;
   int render_width = 640, render_height = 480;
   nlohmann::json extra = nlohmann::json::object();  ///< merged into the summary

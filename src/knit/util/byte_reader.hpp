@@ -66,7 +66,7 @@ void put(std::string& out, T value) {
   out.append(buf, sizeof(T));
 }
 
-/// A 4-byte tag shown safely in messages: printable characters as is, others as \xNN.
+/// A 4-byte tag shown safely in messages: printable characters as is, others as `\xNN`.
 inline std::string printable_tag(std::string_view tag) {
   std::string out;
   for (unsigned char c : tag) {

@@ -42,7 +42,7 @@ double available_memory_bytes();
 std::string format_bytes(double bytes);
 
 /// `text` as a message may show it: bytes that do not print (control characters, binary
-/// data, bytes beyond ASCII) as \xNN, and at most `max_bytes` of it, then "…".
+/// data, bytes beyond ASCII) as `\xNN`, and at most `max_bytes` of it, then "…".
 std::string printable(std::string_view text, std::size_t max_bytes = 40);
 
 /// A JSON library exception's text without the library's tag: "[json.exception.
