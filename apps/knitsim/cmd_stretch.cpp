@@ -16,6 +16,7 @@
 #include "commands.hpp"
 #include "common.hpp"
 #include "knit/io/state_file.hpp"
+#include "knit/present/plot.hpp"
 #include "knit/present/stretch_figures.hpp"
 #include "knit/recipes/relax_knit.hpp"
 #include "knit/recipes/sheet_stretch.hpp"
