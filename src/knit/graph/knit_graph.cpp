@@ -8,42 +8,59 @@ namespace knit::graph {
 
 namespace {
 
-std::uint64_t pair_key(LoopId a, LoopId b) { return (std::uint64_t{a} << 32) | b; }
+std::uint64_t pair_key(LoopId a, LoopId b) {
+  return (std::uint64_t{a} << 32) | b;
+}
 
 }  // namespace
 
 const char* bed_name(Bed bed) {
   switch (bed) {
-    case Bed::FRONT: return "f";
-    case Bed::BACK: return "b";
-    case Bed::FRONT_SLIDER: return "fs";
-    case Bed::BACK_SLIDER: return "bs";
+    case Bed::FRONT:
+      return "f";
+    case Bed::BACK:
+      return "b";
+    case Bed::FRONT_SLIDER:
+      return "fs";
+    case Bed::BACK_SLIDER:
+      return "bs";
   }
   return "?";
 }
 
 const char* kind_name(LoopKind kind) {
   switch (kind) {
-    case LoopKind::KNIT: return "knit";
-    case LoopKind::TUCK: return "tuck";
-    case LoopKind::SPLIT: return "split";
-    case LoopKind::NEW: return "new";
+    case LoopKind::KNIT:
+      return "knit";
+    case LoopKind::TUCK:
+      return "tuck";
+    case LoopKind::SPLIT:
+      return "split";
+    case LoopKind::NEW:
+      return "new";
   }
   return "?";
 }
 
-const char* face_name(Face face) { return face == Face::KNIT ? "knit" : "purl"; }
+const char* face_name(Face face) {
+  return face == Face::KNIT ? "knit" : "purl";
+}
 
 const char* end_name(LoopEnd end) {
   switch (end) {
-    case LoopEnd::LIVE: return "live";
-    case LoopEnd::DROPPED: return "dropped";
-    case LoopEnd::CONSUMED: return "consumed";
+    case LoopEnd::LIVE:
+      return "live";
+    case LoopEnd::DROPPED:
+      return "dropped";
+    case LoopEnd::CONSUMED:
+      return "consumed";
   }
   return "?";
 }
 
-std::string needle_name(Bed bed, int needle) { return bed_name(bed) + std::to_string(needle); }
+std::string needle_name(Bed bed, int needle) {
+  return bed_name(bed) + std::to_string(needle);
+}
 
 int KnitGraph::add_yarn(const std::string& carrier, int in_line, bool hook) {
   Yarn y;
@@ -103,17 +120,18 @@ void KnitGraph::drop_loop(LoopId loop, int line) {
   m_loops[loop].end_line = line;
 }
 
-void KnitGraph::toggle_crossing(LoopId front, LoopId back, int line) {
-  const auto key = pair_key(front, back);
-  const auto it = m_crossing_of.find(key);
-  if (it != m_crossing_of.end()) {
-    m_crossing_alive[it->second] = false;
-    m_crossing_of.erase(it);
-    return;
-  }
-  m_crossing_of.emplace(key, m_crossings.size());
+void KnitGraph::add_crossing(LoopId front, LoopId back, int line) {
+  remove_crossing(front, back);
+  m_crossing_of.emplace(pair_key(std::min(front, back), std::max(front, back)), m_crossings.size());
   m_crossings.push_back({front, back, line});
   m_crossing_alive.push_back(true);
+}
+
+void KnitGraph::remove_crossing(LoopId a, LoopId b) {
+  const auto it = m_crossing_of.find(pair_key(std::min(a, b), std::max(a, b)));
+  if (it == m_crossing_of.end()) return;
+  m_crossing_alive[it->second] = false;
+  m_crossing_of.erase(it);
 }
 
 int KnitGraph::add_stitch_setting(StitchSetting setting) {
@@ -158,7 +176,9 @@ std::vector<Crossing> KnitGraph::crossings() const {
   return out;
 }
 
-int KnitGraph::passes() const { return m_loops.empty() ? 0 : m_loops.back().pass + 1; }
+int KnitGraph::passes() const {
+  return m_loops.empty() ? 0 : m_loops.back().pass + 1;
+}
 
 std::vector<std::size_t> KnitGraph::count_by_kind() const {
   std::vector<std::size_t> n(4, 0);

@@ -33,7 +33,9 @@ inline constexpr LoopId NO_LOOP = ~LoopId{0};
 enum class Bed : std::uint8_t { FRONT, BACK, FRONT_SLIDER, BACK_SLIDER };
 
 /// Whether `bed` is on the front side of the machine (the front bed or its sliders).
-constexpr bool is_front_side(Bed bed) { return bed == Bed::FRONT || bed == Bed::FRONT_SLIDER; }
+constexpr bool is_front_side(Bed bed) {
+  return bed == Bed::FRONT || bed == Bed::FRONT_SLIDER;
+}
 
 /// How a loop was made.
 enum class LoopKind : std::uint8_t {
@@ -62,9 +64,9 @@ struct Loop {
   LoopId id = NO_LOOP;
   int yarn = -1;  ///< index in KnitGraph::yarns()
   Bed bed = Bed::FRONT;
-  int needle = 0;       ///< needle number on `bed` where the loop was made
-  int pass = 0;         ///< the program's loop-making pass (see KnitGraph::passes)
-  int course = 0;       ///< its yarn's pass: how many times the yarn turned before it
+  int needle = 0;  ///< needle number on `bed` where the loop was made
+  int pass = 0;    ///< the program's loop-making pass (see KnitGraph::passes)
+  int course = 0;  ///< its yarn's pass: how many times the yarn turned before it
   LoopKind kind = LoopKind::KNIT;
   Face face = Face::KNIT;
   Direction direction = Direction::NONE;  ///< the carriage direction it was formed in
@@ -97,8 +99,9 @@ struct Yarn {
   std::vector<YarnStep> steps;
 };
 
-/// Two loops carried across each other by a transfer under racking: the yarn of `front`
-/// passes in front of (nearer the front of the machine than) the yarn of `back`.
+/// Two loops carried across each other by racking, so that their order across the beds is
+/// the reverse of the order of the needles they were made on (a cable, a twist): the yarn
+/// of `front` passes in front of (nearer the front of the machine than) that of `back`.
 struct Crossing {
   LoopId front = NO_LOOP;
   LoopId back = NO_LOOP;
@@ -145,10 +148,11 @@ class KnitGraph {
   void consume_loop(LoopId loop, int line);
   /// Marks `loop` dropped off its needle at `line`.
   void drop_loop(LoopId loop, int line);
-  /// Records that `front` and `back` were carried across each other at `line`, or, when
-  /// that same crossing (same loops, same one in front) is already recorded, that they
-  /// were carried back and no longer cross.
-  void toggle_crossing(LoopId front, LoopId back, int line);
+  /// Records that `front` and `back` were carried across each other at `line`, `front`
+  /// passing in front (replacing what was recorded of the two).
+  void add_crossing(LoopId front, LoopId back, int line);
+  /// Records that loops `a` and `b` were carried back and no longer cross.
+  void remove_crossing(LoopId a, LoopId b);
   /// Adds a stitch setting; returns its index.
   int add_stitch_setting(StitchSetting setting);
   /// Builds the children lists and closes the graph for reading.
@@ -164,7 +168,7 @@ class KnitGraph {
   /// The loops pulled through `id`, in the order they were made (after finish()).
   std::span<const LoopId> children(LoopId id) const;
   const std::vector<Yarn>& yarns() const { return m_yarns; }
-  /// Crossings in force at the end (one carried back again is removed), in the order made.
+  /// Crossings in force at the end (loops carried back again do not cross), in the order made.
   std::vector<Crossing> crossings() const;
   const std::vector<StitchSetting>& stitch_settings() const { return m_settings; }
   /// The number of loop-making passes (Loop::pass runs from 0 to passes() - 1).
@@ -187,15 +191,15 @@ class KnitGraph {
   std::vector<Yarn> m_yarns;
   std::vector<Crossing> m_crossings;
   std::vector<bool> m_crossing_alive;
-  std::unordered_map<std::uint64_t, std::size_t> m_crossing_of;  ///< (front, back) -> alive
+  std::unordered_map<std::uint64_t, std::size_t> m_crossing_of;  ///< loop pair -> alive one
   std::vector<StitchSetting> m_settings;
   bool m_finished = false;
 };
 
-const char* bed_name(Bed bed);            ///< "f", "b", "fs", "bs"
-const char* kind_name(LoopKind kind);     ///< "knit", "tuck", "split", "new"
-const char* face_name(Face face);         ///< "knit", "purl"
-const char* end_name(LoopEnd end);        ///< "live", "dropped", "consumed"
+const char* bed_name(Bed bed);                 ///< "f", "b", "fs", "bs"
+const char* kind_name(LoopKind kind);          ///< "knit", "tuck", "split", "new"
+const char* face_name(Face face);              ///< "knit", "purl"
+const char* end_name(LoopEnd end);             ///< "live", "dropped", "consumed"
 std::string needle_name(Bed bed, int needle);  ///< "f12", "bs-3"
 
 }  // namespace knit::graph

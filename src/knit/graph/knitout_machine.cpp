@@ -22,7 +22,9 @@ struct NeedleRef {
   int index = 0;
 };
 
-bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
+bool is_space(char c) {
+  return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f';
+}
 
 std::string_view trim(std::string_view s) {
   while (!s.empty() && is_space(s.front())) s.remove_prefix(1);
@@ -30,9 +32,9 @@ std::string_view trim(std::string_view s) {
   return s;
 }
 
-int sign(double x) { return x > 0 ? 1 : (x < 0 ? -1 : 0); }
-
-std::uint64_t pair_key(LoopId a, LoopId b) { return (std::uint64_t{a} << 32) | b; }
+int sign(double x) {
+  return x > 0 ? 1 : (x < 0 ? -1 : 0);
+}
 
 struct Carrier {
   bool in = false;
@@ -94,8 +96,9 @@ class Machine {
   void clear_stack(NeedleRef n) { m_beds[static_cast<int>(n.bed)].erase(n.index); }
   void check_stitch_needle(NeedleRef n) const {
     if (n.bed == Bed::FRONT_SLIDER || n.bed == Bed::BACK_SLIDER)
-      fail("expected a needle of the front or back bed (f or b): sliders hold loops during "
-           "transfers only, no loop is formed on them");
+      fail(
+          "expected a needle of the front or back bed (f or b): sliders hold loops during "
+          "transfers only, no loop is formed on them");
   }
   void check_aligned(NeedleRef from, NeedleRef to) const;
   void step_carriers(Direction d);
@@ -125,7 +128,7 @@ class Machine {
 
   std::map<int, std::vector<LoopId>> m_beds[4];
   double m_rack = 0;
-  std::unordered_map<std::uint64_t, int> m_aligned;  ///< (back, front) loops aligned: side
+  std::vector<double> m_home;  ///< per loop: x where it was made (front-needle numbers)
   std::map<std::string, Carrier, std::less<>> m_carriers;
   std::vector<std::string> m_hook;  ///< carriers the inserting hook holds
   int m_setting = -1;
@@ -190,7 +193,8 @@ void Machine::carriers_from(std::size_t first, bool must_be_in) {
     for (std::size_t j = 0; j < k; ++j)
       if (m_cs[j] == c) fail("carrier " + knit::printable(c) + " is named twice");
     if (!m_allowed.empty() && !m_allowed.count(c))
-      fail("carrier '" + knit::printable(c) + "' is not one of the machine's carriers (;;Carriers:" +
+      fail("carrier '" + knit::printable(c) +
+           "' is not one of the machine's carriers (;;Carriers:" +
            [&] {
              std::string all;
              for (const auto& a : m_allowed) all += " " + a;
@@ -208,16 +212,19 @@ void Machine::carriers_from(std::size_t first, bool must_be_in) {
 
 void Machine::check_aligned(NeedleRef from, NeedleRef to) const {
   if (is_front_side(from.bed) == is_front_side(to.bed))
-    fail("expected needles on opposite beds (a loop moves from the front bed to the back or "
-         "back), got " +
-         needle_name(from.bed, from.index) + " and " + needle_name(to.bed, to.index));
+    fail(
+        "expected needles on opposite beds (a loop moves from the front bed to the back or "
+        "back), got " +
+        needle_name(from.bed, from.index) + " and " + needle_name(to.bed, to.index));
   const int f = is_front_side(from.bed) ? from.index : to.index;
   const int b = is_front_side(from.bed) ? to.index : from.index;
   if (m_rack != std::floor(m_rack)) {
     std::ostringstream r;
     r << m_rack;
-    fail("at racking " + r.str() + " no needles are aligned for a transfer (expected a whole "
-         "racking, such as 'rack " + std::to_string(f - b) + "' for these needles)");
+    fail("at racking " + r.str() +
+         " no needles are aligned for a transfer (expected a whole "
+         "racking, such as 'rack " +
+         std::to_string(f - b) + "' for these needles)");
   }
   if (static_cast<double>(f - b) != m_rack) {
     std::ostringstream r;
@@ -276,6 +283,7 @@ void Machine::make_loops(std::string_view op, Direction d, NeedleRef n, LoopKind
     l.line = m_line_no;
     l.stitch_setting = m_setting;
     made.push_back(g.add_loop(l, parents));
+    m_home.push_back(is_front_side(n.bed) ? n.index : n.index + m_rack);
   }
   (void)op;
 }
@@ -290,15 +298,18 @@ void Machine::move_loops(NeedleRef from, NeedleRef to) {
   dst.insert(dst.end(), moving.begin(), moving.end());
 }
 
-// the back bed moves from racking m_rack to r: a back-side loop carried past a front-side
-// loop crosses it, the front one in front; passing back undoes the crossing. Loops facing
-// each other (aligned) have not crossed: which side one came from is remembered for the
-// next rack.
+// the back bed moves from racking m_rack to r. Two loops, one on each side, cross while
+// their order across the beds (x, in front-needle numbers: a back needle j is at j + R) is
+// the reverse of the order of the places they were made (home); the one on the front side
+// when they came to cross passes in front. Loops side by side (equal x, or made at one
+// place) do not cross. Only the pairs the back loop's sweep reaches can change.
 void Machine::rack_to(double r) {
   const double r0 = m_rack;
   m_rack = r;
   if (r == r0) return;
-  std::unordered_map<std::uint64_t, int> next_aligned;
+  auto inverted = [](double xb, double xf, double hb, double hf) {
+    return sign(xb - xf) * sign(hb - hf) < 0;
+  };
   for (Bed back_bed : {Bed::BACK, Bed::BACK_SLIDER})
     for (const auto& [j, back_loops] : m_beds[static_cast<int>(back_bed)]) {
       if (back_loops.empty()) continue;
@@ -308,24 +319,17 @@ void Machine::rack_to(double r) {
         const auto& front = m_beds[static_cast<int>(front_bed)];
         for (auto it = front.lower_bound(static_cast<int>(std::ceil(lo)));
              it != front.end() && it->first <= hi; ++it) {
-          const double i = it->first;
+          const double xf = it->first;
           for (LoopId b : back_loops)
             for (LoopId f : it->second) {
-              bool flip = false;
-              if (i == x1) {
-                next_aligned[pair_key(b, f)] = sign(x0 - i);
-              } else if (i == x0) {
-                const auto came = m_aligned.find(pair_key(b, f));
-                flip = came != m_aligned.end() && came->second == -sign(x1 - i);
-              } else {
-                flip = true;
-              }
-              if (flip) g.toggle_crossing(f, b, m_line_no);
+              const bool before = inverted(x0, xf, m_home[b], m_home[f]);
+              const bool after = inverted(x1, xf, m_home[b], m_home[f]);
+              if (after && !before) g.add_crossing(f, b, m_line_no);
+              if (before && !after) g.remove_crossing(f, b);
             }
         }
       }
     }
-  m_aligned = std::move(next_aligned);
 }
 
 void Machine::header_line(std::string_view line) {
@@ -350,8 +354,8 @@ void Machine::header_line(std::string_view line) {
   } else if (name == "Width") {
     long long w = 0;
     const auto res = std::from_chars(value.data(), value.data() + value.size(), w);
-    if (value.empty() || res.ec != std::errc() || res.ptr != value.data() + value.size() ||
-        w < 1 || w > 2 * MAX_NEEDLE + 1) {
+    if (value.empty() || res.ec != std::errc() || res.ptr != value.data() + value.size() || w < 1 ||
+        w > 2 * MAX_NEEDLE + 1) {
       m_instruction = line;
       fail("expected ';;Width: N', the bed's number of needles (1 to " +
            std::to_string(2 * MAX_NEEDLE + 1) + ")");
@@ -389,8 +393,9 @@ void Machine::instruction(std::string_view code) {
     check_stitch_needle(n);
     carriers_from(3, true);
     if (op == "purl")
-      note("purl", "'purl' is not a knitout-2 opcode: read as a knit whose loop is pulled the "
-                   "other way (purl as seen from its bed)");
+      note("purl",
+           "'purl' is not a knitout-2 opcode: read as a knit whose loop is pulled the "
+           "other way (purl as seen from its bed)");
     std::vector<LoopId>* held = find_stack(n);
     if (m_cs.empty()) {
       // no yarn: a knit drops, a tuck is an a-miss
@@ -410,7 +415,8 @@ void Machine::instruction(std::string_view code) {
       std::vector<LoopId>& s = stack(n);
       s.insert(s.end(), m_made.begin(), m_made.end());
     } else {
-      m_scratch.assign(held ? held->begin() : m_scratch.end(), held ? held->end() : m_scratch.end());
+      m_scratch.assign(held ? held->begin() : m_scratch.end(),
+                       held ? held->end() : m_scratch.end());
       if (!held) m_scratch.clear();
       make_loops(op, d, n, empty ? LoopKind::NEW : LoopKind::KNIT, face, m_scratch, m_made);
       for (LoopId l : m_scratch) g.consume_loop(l, m_line_no);
@@ -502,15 +508,20 @@ void Machine::instruction(std::string_view code) {
     std::sort(held.begin(), held.end());
     if (held.empty()) fail("the inserting hook holds no carrier (expected 'inhook' before it)");
     if (named != held)
-      fail("the inserting hook holds carrier(s)" + [&] {
-        std::string s;
-        for (const auto& h : m_hook) s += " " + h;
-        return s;
-      }() + ", not these: expected 'releasehook" + [&] {
-        std::string s;
-        for (const auto& h : m_hook) s += " " + h;
-        return s;
-      }() + "'");
+      fail(
+          "the inserting hook holds carrier(s)" +
+          [&] {
+            std::string s;
+            for (const auto& h : m_hook) s += " " + h;
+            return s;
+          }() +
+          ", not these: expected 'releasehook" +
+          [&] {
+            std::string s;
+            for (const auto& h : m_hook) s += " " + h;
+            return s;
+          }() +
+          "'");
     m_hook.clear();
   } else if (op == "out" || op == "outhook") {
     if (m_tokens.size() < 2) fail("expected '" + std::string(op) + " CS', at least one carrier");
@@ -521,8 +532,9 @@ void Machine::instruction(std::string_view code) {
       car.in = false;
       const auto h = std::find(m_hook.begin(), m_hook.end(), c);
       if (h != m_hook.end()) {
-        note("out on hook", "a carrier taken out while the inserting hook still held it: the "
-                            "hook is released with it");
+        note("out on hook",
+             "a carrier taken out while the inserting hook still held it: the "
+             "hook is released with it");
         m_hook.erase(h);
       }
     }
@@ -574,8 +586,7 @@ KnitoutResult Machine::run() {
       int version = 0;
       const auto res = std::from_chars(v.data(), v.data() + v.size(), version);
       if (v.empty() || res.ec != std::errc() || res.ptr != v.data() + v.size() || version < 0)
-        fail("expected ';!knitout-N' with N a version number, got '" + knit::printable(line) +
-             "'");
+        fail("expected ';!knitout-N' with N a version number, got '" + knit::printable(line) + "'");
       m_result.version = version;
       if (version > 2)
         note("version", "knitout-" + std::to_string(version) +
@@ -602,7 +613,8 @@ KnitoutResult Machine::run() {
 void Machine::finish() {
   for (const auto& [name, car] : m_carriers)
     if (car.in)
-      note("still in " + name, "carrier " + name + " is still in at the end: its yarn is cut there");
+      note("still in " + name,
+           "carrier " + name + " is still in at the end: its yarn is cut there");
   if (!m_hook.empty()) note("hook held", "the inserting hook still holds a carrier at the end");
   m_result.final_racking = m_rack;
   g.finish();

@@ -64,18 +64,18 @@ inline constexpr std::size_t MAX_LOOPS = 8u << 20;
 
 /// A remark on something accepted but not interpreted (an extension, an old opcode).
 struct KnitoutNote {
-  int line = 0;     ///< its first occurrence
-  int count = 0;    ///< how many lines it applies to
+  int line = 0;   ///< its first occurrence
+  int count = 0;  ///< how many lines it applies to
   std::string text;
 };
 
 /// The result of running a program.
 struct KnitoutResult {
-  KnitGraph graph;                              ///< finished
+  KnitGraph graph;                             ///< finished
   std::map<std::string, std::string> headers;  ///< ";;Name: value" header lines
   std::vector<KnitoutNote> notes;
-  int version = 0;            ///< N of ";!knitout-N"
-  int lines = 0;              ///< lines read
+  int version = 0;               ///< N of ";!knitout-N"
+  int lines = 0;                 ///< lines read
   std::size_t instructions = 0;  ///< instruction lines (not comments or blank)
   double final_racking = 0;
 };
