@@ -340,6 +340,11 @@ TEST(KnitoutMachine, RefusesWhatTheMachineWouldRefuseNamingTheLine) {
   struct Case {
     std::string body, line, expected;
   };
+  auto tucks = [](int n) {
+    std::string t;
+    for (int k = 0; k < n; ++k) t += "tuck + f1 1\n";
+    return t;
+  };
   const std::vector<Case> cases = {
       {"knit + f1 1\n", ":5:", "carrier 1 is not in"},
       {"in 1\nout 1\nknit + f1 1\n", ":7:", "carrier 1 is not in"},
@@ -363,6 +368,8 @@ TEST(KnitoutMachine, RefusesWhatTheMachineWouldRefuseNamingTheLine) {
       {"stitch 5\n", ":5:", "expected 'stitch L T'"},
       {"in 1\nsplit + f1 1\n", ":6:", "expected a needle"},
       {"in 1\nmiss + f1\n", ":6:", "expected 'miss D N CS'"},
+      {"in 1\n" + tucks(33), ":38:", "would hold 33 loops"},
+      {"in 1\nrack 33\n", ":6:", "beyond the"},
   };
   for (const Case& c : cases) {
     const std::string why = refusal(c.body);

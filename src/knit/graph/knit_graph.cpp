@@ -62,11 +62,19 @@ std::string needle_name(Bed bed, int needle) {
   return bed_name(bed) + std::to_string(needle);
 }
 
+void KnitGraph::reserve(std::size_t loops) {
+  m_loops.reserve(loops);
+  m_parents.reserve(loops);
+  m_step_reserve = loops;
+}
+
 int KnitGraph::add_yarn(const std::string& carrier, int in_line, bool hook) {
   Yarn y;
   y.carrier = carrier;
   y.in_line = in_line;
   y.hook = hook;
+  // the first yarn may well make every loop; later ones grow as they need
+  if (m_yarns.empty()) y.steps.reserve(m_step_reserve);
   m_yarns.push_back(std::move(y));
   return static_cast<int>(m_yarns.size()) - 1;
 }
@@ -121,17 +129,12 @@ void KnitGraph::drop_loop(LoopId loop, int line) {
 }
 
 void KnitGraph::add_crossing(LoopId front, LoopId back, int line) {
-  remove_crossing(front, back);
-  m_crossing_of.emplace(pair_key(std::min(front, back), std::max(front, back)), m_crossings.size());
-  m_crossings.push_back({front, back, line});
-  m_crossing_alive.push_back(true);
+  const auto key = pair_key(std::min(front, back), std::max(front, back));
+  m_crossing_of[key] = {m_crossings_made++, Crossing{front, back, line}};
 }
 
 void KnitGraph::remove_crossing(LoopId a, LoopId b) {
-  const auto it = m_crossing_of.find(pair_key(std::min(a, b), std::max(a, b)));
-  if (it == m_crossing_of.end()) return;
-  m_crossing_alive[it->second] = false;
-  m_crossing_of.erase(it);
+  m_crossing_of.erase(pair_key(std::min(a, b), std::max(a, b)));
 }
 
 int KnitGraph::add_stitch_setting(StitchSetting setting) {
@@ -170,9 +173,14 @@ std::span<const LoopId> KnitGraph::children(LoopId id) const {
 }
 
 std::vector<Crossing> KnitGraph::crossings() const {
+  std::vector<std::pair<std::uint64_t, Crossing>> made(m_crossing_of.size());
+  std::size_t k = 0;
+  for (const auto& [key, c] : m_crossing_of) made[k++] = c;
+  std::sort(made.begin(), made.end(),
+            [](const auto& a, const auto& b) { return a.first < b.first; });
   std::vector<Crossing> out;
-  for (std::size_t k = 0; k < m_crossings.size(); ++k)
-    if (m_crossing_alive[k]) out.push_back(m_crossings[k]);
+  out.reserve(made.size());
+  for (const auto& c : made) out.push_back(c.second);
   return out;
 }
 
@@ -253,7 +261,7 @@ GraphCheck KnitGraph::check() const {
 std::size_t KnitGraph::memory_bytes() const {
   std::size_t n = m_loops.capacity() * sizeof(Loop) +
                   (m_parents.capacity() + m_children.capacity()) * sizeof(LoopId) +
-                  m_crossings.capacity() * sizeof(Crossing);
+                  m_crossing_of.size() * (sizeof(Crossing) + 32);
   for (const Yarn& y : m_yarns) n += sizeof(Yarn) + y.steps.capacity() * sizeof(YarnStep);
   return n;
 }

@@ -20,6 +20,7 @@
 #include <span>
 #include <string>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 namespace knit::graph {
@@ -133,6 +134,8 @@ class KnitGraph {
  public:
   // ---- building (front ends) ----
 
+  /// Reserves room for `loops` loops (and as many parents and yarn steps).
+  void reserve(std::size_t loops);
   /// Starts a new piece of yarn for `carrier`, brought in at `in_line`; returns its index.
   int add_yarn(const std::string& carrier, int in_line, bool hook);
   /// Ends yarn `yarn` at `out_line` (the out/outhook instruction).
@@ -189,10 +192,11 @@ class KnitGraph {
   std::vector<LoopId> m_parents;
   std::vector<LoopId> m_children;
   std::vector<Yarn> m_yarns;
-  std::vector<Crossing> m_crossings;
-  std::vector<bool> m_crossing_alive;
-  std::unordered_map<std::uint64_t, std::size_t> m_crossing_of;  ///< loop pair -> alive one
+  /// the crossings in force, by loop pair, with the order they were made in
+  std::unordered_map<std::uint64_t, std::pair<std::uint64_t, Crossing>> m_crossing_of;
+  std::uint64_t m_crossings_made = 0;
   std::vector<StitchSetting> m_settings;
+  std::size_t m_step_reserve = 0;
   bool m_finished = false;
 };
 

@@ -94,6 +94,12 @@ class Machine {
     return it == bed.end() ? nullptr : &it->second;
   }
   void clear_stack(NeedleRef n) { m_beds[static_cast<int>(n.bed)].erase(n.index); }
+  void check_stack(NeedleRef n, std::size_t size) const {
+    if (size > MAX_LOOPS_PER_NEEDLE)
+      fail("needle " + needle_name(n.bed, n.index) + " would hold " + std::to_string(size) +
+           " loops; a needle holds at most " + std::to_string(MAX_LOOPS_PER_NEEDLE) +
+           " (a knit pulls a new loop through them)");
+  }
   void check_stitch_needle(NeedleRef n) const {
     if (n.bed == Bed::FRONT_SLIDER || n.bed == Bed::BACK_SLIDER)
       fail(
@@ -128,6 +134,7 @@ class Machine {
 
   std::map<int, std::vector<LoopId>> m_beds[4];
   double m_rack = 0;
+  std::size_t m_rack_pairs = 0;
   std::vector<double> m_home;  ///< per loop: x where it was made (front-needle numbers)
   std::map<std::string, Carrier, std::less<>> m_carriers;
   std::vector<std::string> m_hook;  ///< carriers the inserting hook holds
@@ -188,6 +195,9 @@ double Machine::number(std::string_view t, const char* what) const {
 
 void Machine::carriers_from(std::size_t first, bool must_be_in) {
   m_cs.assign(m_tokens.begin() + static_cast<std::ptrdiff_t>(first), m_tokens.end());
+  if (m_cs.size() > MAX_LOOPS_PER_NEEDLE)
+    fail("expected at most " + std::to_string(MAX_LOOPS_PER_NEEDLE) + " carriers, got " +
+         std::to_string(m_cs.size()));
   for (std::size_t k = 0; k < m_cs.size(); ++k) {
     const std::string_view c = m_cs[k];
     for (std::size_t j = 0; j < k; ++j)
@@ -295,6 +305,7 @@ void Machine::move_loops(NeedleRef from, NeedleRef to) {
   std::vector<LoopId> moving = std::move(*src);
   clear_stack(from);
   std::vector<LoopId>& dst = stack(to);
+  check_stack(to, dst.size() + moving.size());
   dst.insert(dst.end(), moving.begin(), moving.end());
 }
 
@@ -320,6 +331,10 @@ void Machine::rack_to(double r) {
         for (auto it = front.lower_bound(static_cast<int>(std::ceil(lo)));
              it != front.end() && it->first <= hi; ++it) {
           const double xf = it->first;
+          m_rack_pairs += back_loops.size() * it->second.size();
+          if (m_rack_pairs > MAX_RACK_PAIRS)
+            fail("the program's racking carries more than " + std::to_string(MAX_RACK_PAIRS) +
+                 " loop pairs past each other, more than this interpreter follows");
           for (LoopId b : back_loops)
             for (LoopId f : it->second) {
               const bool before = inverted(x0, xf, m_home[b], m_home[f]);
@@ -411,6 +426,7 @@ void Machine::instruction(std::string_view code) {
     const Face face = pulled_to_front ? Face::KNIT : Face::PURL;
     const bool empty = !held || held->empty();
     if (op == "tuck") {
+      check_stack(n, (held ? held->size() : 0) + m_cs.size());
       make_loops(op, d, n, empty ? LoopKind::NEW : LoopKind::TUCK, face, {}, m_made);
       std::vector<LoopId>& s = stack(n);
       s.insert(s.end(), m_made.begin(), m_made.end());
@@ -565,6 +581,9 @@ void Machine::instruction(std::string_view code) {
 }
 
 KnitoutResult Machine::run() {
+  // about one loop per line: room for them all at once (at most MAX_LOOPS)
+  const auto newlines = static_cast<std::size_t>(std::count(m_text.begin(), m_text.end(), '\n'));
+  g.reserve(std::min(newlines + 1, MAX_LOOPS));
   std::size_t pos = 0;
   if (m_text.substr(0, 3) == "\xEF\xBB\xBF") pos = 3;
   bool crlf = false;

@@ -40,7 +40,8 @@
 // brought in twice, a releasehook without an inhook, a transfer between needles on the
 // same bed or not aligned by the racking, stitches on sliders, a needle beyond the
 // interpreter's range (|N| <= MAX_NEEDLE) or the bed's width, a racking beyond MAX_RACK,
-// more than MAX_LOOPS loops.
+// more than MAX_LOOPS loops or MAX_LOOPS_PER_NEEDLE on a needle, racking that carries more
+// than MAX_RACK_PAIRS loop pairs past each other.
 #include <cstddef>
 #include <map>
 #include <string>
@@ -57,8 +58,14 @@ namespace knit::graph {
 inline constexpr std::size_t MAX_KNITOUT_BYTES = 64ull << 20;
 /// Needle numbers accepted: -MAX_NEEDLE … MAX_NEEDLE (no machine is wider).
 inline constexpr int MAX_NEEDLE = 10000;
-/// The largest racking accepted, in needles (either way).
-inline constexpr double MAX_RACK = 64;
+/// The largest racking accepted, in needles (either way); machines rack a few inches.
+inline constexpr double MAX_RACK = 32;
+/// The most loops one needle may hold at once (a hook holds a few: a decrease stacks 2-3,
+/// tucks a few more).
+inline constexpr std::size_t MAX_LOOPS_PER_NEEDLE = 32;
+/// The most loop pairs the racking may carry past each other over a whole program (each
+/// rack looks at the pairs its back-bed loops sweep past).
+inline constexpr std::size_t MAX_RACK_PAIRS = std::size_t{1} << 28;
 /// The most loops a program may make.
 inline constexpr std::size_t MAX_LOOPS = 8u << 20;
 
