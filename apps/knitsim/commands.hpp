@@ -13,5 +13,6 @@ void register_stretch(CLI::App& app);
 void register_version(CLI::App& app);
 void register_mesh(CLI::App& app);
 void register_view(CLI::App& app);
+void register_graph(CLI::App& app);
 
 }  // namespace knitsim

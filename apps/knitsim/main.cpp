@@ -26,6 +26,7 @@ int main(int argc, char** argv) {
   knitsim::register_stretch(app);
   knitsim::register_mesh(app);
   knitsim::register_view(app);
+  knitsim::register_graph(app);
   knitsim::register_version(app);
   app.footer(knitsim::help_footer());
   for (CLI::App* sub : app.get_subcommands({})) sub->footer(knitsim::help_footer());
