@@ -19,18 +19,18 @@ namespace {
 
 namespace kg = knit::graph;
 
-nlohmann::json loop_json(const kg::KnitGraph& g, kg::LoopId id) {
+nlohmann::ordered_json loop_json(const kg::KnitGraph& g, kg::LoopId id) {
   const kg::Loop& l = g.loop(id);
-  nlohmann::json j = {{"id", l.id},
-                      {"yarn", l.yarn},
-                      {"needle", kg::needle_name(l.bed, l.needle)},
-                      {"pass", l.pass},
-                      {"course", l.course},
-                      {"kind", kg::kind_name(l.kind)},
-                      {"face", kg::face_name(l.face)},
-                      {"direction", l.direction == kg::Direction::PLUS ? "+" : "-"},
-                      {"line", l.line},
-                      {"end", kg::end_name(l.end)}};
+  nlohmann::ordered_json j = {{"id", l.id},
+                              {"yarn", l.yarn},
+                              {"needle", kg::needle_name(l.bed, l.needle)},
+                              {"pass", l.pass},
+                              {"course", l.course},
+                              {"kind", kg::kind_name(l.kind)},
+                              {"face", kg::face_name(l.face)},
+                              {"direction", l.direction == kg::Direction::PLUS ? "+" : "-"},
+                              {"line", l.line},
+                              {"end", kg::end_name(l.end)}};
   if (l.end != kg::LoopEnd::LIVE) j["end_line"] = l.end_line;
   const auto p = g.parents(id);
   j["parents"] = std::vector<kg::LoopId>(p.begin(), p.end());
@@ -38,10 +38,10 @@ nlohmann::json loop_json(const kg::KnitGraph& g, kg::LoopId id) {
   return j;
 }
 
-nlohmann::json graph_json(const std::string& path, const kg::KnitoutResult& r, bool loops) {
+nlohmann::ordered_json graph_json(const std::string& path, const kg::KnitoutResult& r, bool loops) {
   const kg::KnitGraph& g = r.graph;
   const kg::GraphCheck check = g.check();
-  nlohmann::json j;
+  nlohmann::ordered_json j;
   j["program"] = path;
   j["knitout_version"] = r.version;
   j["lines"] = r.lines;
@@ -59,7 +59,7 @@ nlohmann::json graph_json(const std::string& path, const kg::KnitoutResult& r, b
                 {"purl_face", purl},      {"front_bed", g.num_loops() - back},
                 {"back_bed", back}};
   j["passes"] = g.passes();
-  nlohmann::json yarns = nlohmann::json::array();
+  nlohmann::ordered_json yarns = nlohmann::ordered_json::array();
   for (std::size_t y = 0; y < g.yarns().size(); ++y) {
     const kg::Yarn& yarn = g.yarns()[y];
     std::size_t made = 0, misses = 0;
@@ -72,10 +72,11 @@ nlohmann::json graph_json(const std::string& path, const kg::KnitoutResult& r, b
         ++misses;
       }
     }
-    nlohmann::json yj = {{"index", y},        {"carrier", yarn.carrier}, {"in_line", yarn.in_line},
-                         {"hook", yarn.hook}, {"loops", made},           {"misses", misses},
-                         {"courses", courses}};
-    yj["out_line"] = yarn.out_line > 0 ? nlohmann::json(yarn.out_line) : nlohmann::json(nullptr);
+    nlohmann::ordered_json yj = {
+        {"index", y},    {"carrier", yarn.carrier}, {"in_line", yarn.in_line}, {"hook", yarn.hook},
+        {"loops", made}, {"misses", misses},        {"courses", courses}};
+    yj["out_line"] =
+        yarn.out_line > 0 ? nlohmann::ordered_json(yarn.out_line) : nlohmann::ordered_json(nullptr);
     if (!yarn.steps.empty()) {
       yj["first_needle"] = kg::needle_name(yarn.steps.front().bed, yarn.steps.front().needle);
       yj["last_needle"] = kg::needle_name(yarn.steps.back().bed, yarn.steps.back().needle);
@@ -84,20 +85,20 @@ nlohmann::json graph_json(const std::string& path, const kg::KnitoutResult& r, b
   }
   j["yarns"] = yarns;
   auto free_list = [&](const std::vector<kg::LoopId>& ids) {
-    nlohmann::json a = nlohmann::json::array();
+    nlohmann::ordered_json a = nlohmann::ordered_json::array();
     for (kg::LoopId id : ids) {
       const kg::Loop& l = g.loop(id);
-      nlohmann::json e = {{"loop", id},
-                          {"needle", kg::needle_name(l.bed, l.needle)},
-                          {"kind", kg::kind_name(l.kind)},
-                          {"line", l.line}};
+      nlohmann::ordered_json e = {{"loop", id},
+                                  {"needle", kg::needle_name(l.bed, l.needle)},
+                                  {"kind", kg::kind_name(l.kind)},
+                                  {"line", l.line}};
       if (l.end == kg::LoopEnd::DROPPED) e["dropped_line"] = l.end_line;
       a.push_back(e);
     }
     return a;
   };
   j["free_loops"] = {{"live", free_list(check.free_live)}, {"dropped", free_list(check.ladders)}};
-  nlohmann::json crossings = nlohmann::json::array();
+  nlohmann::ordered_json crossings = nlohmann::ordered_json::array();
   for (const kg::Crossing& c : g.crossings())
     crossings.push_back(
         {{"front", c.front},
@@ -106,20 +107,20 @@ nlohmann::json graph_json(const std::string& path, const kg::KnitoutResult& r, b
          {"back_needle", kg::needle_name(g.loop(c.back).bed, g.loop(c.back).needle)},
          {"line", c.line}});
   j["crossings"] = crossings;
-  nlohmann::json settings = nlohmann::json::array();
+  nlohmann::ordered_json settings = nlohmann::ordered_json::array();
   for (const kg::StitchSetting& s : g.stitch_settings()) {
-    nlohmann::json e = {{"op", s.op}, {"value", s.value}, {"line", s.line}};
+    nlohmann::ordered_json e = {{"op", s.op}, {"value", s.value}, {"line", s.line}};
     if (s.op == "stitch") e["value2"] = s.value2;
     settings.push_back(e);
   }
   j["stitch_settings"] = settings;
   j["problems"] = check.problems;
-  nlohmann::json notes = nlohmann::json::array();
+  nlohmann::ordered_json notes = nlohmann::ordered_json::array();
   for (const kg::KnitoutNote& n : r.notes)
     notes.push_back({{"line", n.line}, {"count", n.count}, {"text", n.text}});
   j["notes"] = notes;
   if (loops) {
-    nlohmann::json all = nlohmann::json::array();
+    nlohmann::ordered_json all = nlohmann::ordered_json::array();
     for (kg::LoopId id = 0; id < g.num_loops(); ++id) all.push_back(loop_json(g, id));
     j["loop_list"] = all;
   }
