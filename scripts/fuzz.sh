@@ -3,14 +3,15 @@
 # while. Usage: scripts/fuzz.sh [seconds per target, default 60]
 # Installs what is missing first (the build's packages, clang and its libFuzzer runtime),
 # and fails when a target cannot be built or run, finds a problem, or ran no input at all.
-# Seed corpora: the shipped .yarns swatches and fuzz/seeds/<kind>/. Findings go to
+# Seed corpora: the shipped .yarns swatches and fuzz/seeds/<kind>/ (knitout: small programs
+# and the first lines of bigger ones). Findings go to
 # build-fuzz/artifacts/<target>/; keep each as a regression input in tests/data/io/fuzz/.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds=${1:-60}
 build_dir=${KNIT_FUZZ_BUILD_DIR:-build-fuzz}
 jobs=${KNIT_JOBS:-1}
-targets=(fuzz_yarns fuzz_bcc fuzz_obj fuzz_kstate fuzz_scene fuzz_chart)
+targets=(fuzz_yarns fuzz_bcc fuzz_obj fuzz_kstate fuzz_scene fuzz_chart fuzz_knitout)
 
 scripts/setup.sh --install-only
 # libclang-rt-dev is the runtime (libclang_rt.fuzzer) of the default clang (14 on Debian 12)
@@ -58,6 +59,10 @@ for t in "${targets[@]}"; do
     fuzz_chart)
       cp -n fuzz/seeds/chart/* "$corpus"/
       max_len=2048
+      ;;
+    fuzz_knitout)
+      cp -n fuzz/seeds/knitout/* "$corpus"/
+      max_len=8192
       ;;
   esac
   echo "fuzz: $t for ${seconds}s"

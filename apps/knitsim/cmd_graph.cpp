@@ -1,0 +1,155 @@
+// knitsim graph PROGRAM.k [--loops] [--out FILE.json]: runs a knitout program on the
+// machine model (src/knit/graph/knitout_machine.hpp) and prints its knit graph's summary as
+// JSON: the loops by kind, face and bed, the yarns (carrier, in and out lines, loops,
+// misses, courses), passes, free loops (live at the end, or dropped: ladders, each with
+// the line that made it and the one that dropped it), crossings, the checks' problems and
+// the interpreter's notes; with --loops every loop too. docs/knit-graph.md describes it.
+#include <iostream>
+#include <memory>
+#include <nlohmann/json.hpp>
+
+#include "commands.hpp"
+#include "common.hpp"
+#include "knit/graph/knitout_machine.hpp"
+#include "knit/io/state_file.hpp"
+#include "knit/util/atomic_file.hpp"
+
+namespace knitsim {
+
+namespace {
+
+namespace kg = knit::graph;
+
+nlohmann::ordered_json loop_json(const kg::KnitGraph& g, kg::LoopId id) {
+  const kg::Loop& l = g.loop(id);
+  nlohmann::ordered_json j = {{"id", l.id},
+                              {"yarn", l.yarn},
+                              {"needle", kg::needle_name(l.bed, l.needle)},
+                              {"pass", l.pass},
+                              {"course", l.course},
+                              {"kind", kg::kind_name(l.kind)},
+                              {"face", kg::face_name(l.face)},
+                              {"direction", l.direction == kg::Direction::PLUS ? "+" : "-"},
+                              {"line", l.line},
+                              {"end", kg::end_name(l.end)}};
+  if (l.end != kg::LoopEnd::LIVE) j["end_line"] = l.end_line;
+  const auto p = g.parents(id);
+  j["parents"] = std::vector<kg::LoopId>(p.begin(), p.end());
+  if (l.stitch_setting >= 0) j["stitch_setting"] = l.stitch_setting;
+  return j;
+}
+
+nlohmann::ordered_json graph_json(const std::string& path, const kg::KnitoutResult& r, bool loops) {
+  const kg::KnitGraph& g = r.graph;
+  const kg::GraphCheck check = g.check();
+  nlohmann::ordered_json j;
+  j["program"] = path;
+  j["knitout_version"] = r.version;
+  j["lines"] = r.lines;
+  j["instructions"] = r.instructions;
+  j["headers"] = r.headers;
+  const auto kinds = g.count_by_kind();
+  std::size_t purl = 0, back = 0;
+  for (const kg::Loop& l : g.loops()) {
+    purl += l.face == kg::Face::PURL;
+    back += !kg::is_front_side(l.bed);
+  }
+  j["loops"] = {{"total", g.num_loops()}, {"knit", kinds[0]},
+                {"tuck", kinds[1]},       {"split", kinds[2]},
+                {"new", kinds[3]},        {"knit_face", g.num_loops() - purl},
+                {"purl_face", purl},      {"front_bed", g.num_loops() - back},
+                {"back_bed", back}};
+  j["passes"] = g.passes();
+  nlohmann::ordered_json yarns = nlohmann::ordered_json::array();
+  for (std::size_t y = 0; y < g.yarns().size(); ++y) {
+    const kg::Yarn& yarn = g.yarns()[y];
+    std::size_t made = 0, misses = 0;
+    int courses = 0;
+    for (const kg::YarnStep& s : yarn.steps) {
+      if (s.kind == kg::YarnStep::LOOP) {
+        ++made;
+        courses = std::max(courses, g.loop(s.loop).course + 1);
+      } else {
+        ++misses;
+      }
+    }
+    nlohmann::ordered_json yj = {
+        {"index", y},    {"carrier", yarn.carrier}, {"in_line", yarn.in_line}, {"hook", yarn.hook},
+        {"loops", made}, {"misses", misses},        {"courses", courses}};
+    yj["out_line"] =
+        yarn.out_line > 0 ? nlohmann::ordered_json(yarn.out_line) : nlohmann::ordered_json(nullptr);
+    if (!yarn.steps.empty()) {
+      yj["first_needle"] = kg::needle_name(yarn.steps.front().bed, yarn.steps.front().needle);
+      yj["last_needle"] = kg::needle_name(yarn.steps.back().bed, yarn.steps.back().needle);
+    }
+    yarns.push_back(yj);
+  }
+  j["yarns"] = yarns;
+  auto free_list = [&](const std::vector<kg::LoopId>& ids) {
+    nlohmann::ordered_json a = nlohmann::ordered_json::array();
+    for (kg::LoopId id : ids) {
+      const kg::Loop& l = g.loop(id);
+      nlohmann::ordered_json e = {{"loop", id},
+                                  {"needle", kg::needle_name(l.bed, l.needle)},
+                                  {"kind", kg::kind_name(l.kind)},
+                                  {"line", l.line}};
+      if (l.end == kg::LoopEnd::DROPPED) e["dropped_line"] = l.end_line;
+      a.push_back(e);
+    }
+    return a;
+  };
+  j["free_loops"] = {{"live", free_list(check.free_live)}, {"dropped", free_list(check.ladders)}};
+  nlohmann::ordered_json crossings = nlohmann::ordered_json::array();
+  for (const kg::Crossing& c : g.crossings())
+    crossings.push_back(
+        {{"front", c.front},
+         {"back", c.back},
+         {"front_needle", kg::needle_name(g.loop(c.front).bed, g.loop(c.front).needle)},
+         {"back_needle", kg::needle_name(g.loop(c.back).bed, g.loop(c.back).needle)},
+         {"line", c.line}});
+  j["crossings"] = crossings;
+  nlohmann::ordered_json settings = nlohmann::ordered_json::array();
+  for (const kg::StitchSetting& s : g.stitch_settings()) {
+    nlohmann::ordered_json e = {{"op", s.op}, {"value", s.value}, {"line", s.line}};
+    if (s.op == "stitch") e["value2"] = s.value2;
+    settings.push_back(e);
+  }
+  j["stitch_settings"] = settings;
+  j["problems"] = check.problems;
+  nlohmann::ordered_json notes = nlohmann::ordered_json::array();
+  for (const kg::KnitoutNote& n : r.notes)
+    notes.push_back({{"line", n.line}, {"count", n.count}, {"text", n.text}});
+  j["notes"] = notes;
+  if (loops) {
+    nlohmann::ordered_json all = nlohmann::ordered_json::array();
+    for (kg::LoopId id = 0; id < g.num_loops(); ++id) all.push_back(loop_json(g, id));
+    j["loop_list"] = all;
+  }
+  return j;
+}
+
+}  // namespace
+
+void register_graph(CLI::App& app) {
+  struct Opts {
+    std::string program, out;
+    bool loops = false;
+  };
+  auto o = std::make_shared<Opts>();
+  CLI::App* cmd = app.add_subcommand(
+      "graph", "run a knitout program on the machine model and print its knit graph as JSON");
+  add_required_path(cmd, "program", o->program, "knitout program (.k, .knitout)")
+      ->check(existing_file());
+  cmd->add_flag("--loops", o->loops, "list every loop (its needle, course, kind, face, parents)");
+  add_out_option(cmd, o->out, "write the JSON to this file", "standard output");
+  cmd->callback([o]() {
+    const kg::KnitoutResult r = kg::load_knitout_graph(o->program);
+    const std::string text = graph_json(o->program, r, o->loops).dump(2) + "\n";
+    if (o->out.empty())
+      std::cout << text;
+    else
+      knit::write_file_atomic(o->out, text);
+  });
+}
+
+}  // namespace knitsim

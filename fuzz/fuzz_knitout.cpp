@@ -1,0 +1,41 @@
+// libFuzzer target: the knitout interpreter (run_knitout), which runs a program on the
+// machine model and builds its knit graph.
+// std::invalid_argument is a clean refusal; crashes, sanitizer reports, hangs and a graph
+// that breaks the interpreter's promises are bugs: a graph the interpreter built passes
+// the graph's own checks, every loop's parents were made before it and lie on its yarn's
+// machine (ids in range), its crossings name two different loops, and the check's free
+// loops are loops the graph holds.
+#include <cstddef>
+#include <cstdint>
+#include <stdexcept>
+#include <string_view>
+
+#include "knit/graph/knitout_machine.hpp"
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  const std::string_view text(reinterpret_cast<const char*>(data), size);
+  try {
+    const knit::graph::KnitoutResult r = knit::graph::run_knitout(text, "fuzz.k");
+    const knit::graph::KnitGraph& g = r.graph;
+    const knit::graph::GraphCheck c = g.check();
+    if (!c.ok()) __builtin_trap();
+    std::size_t parents = 0, children = 0;
+    for (const knit::graph::Loop& l : g.loops()) {
+      if (l.yarn < 0 || static_cast<std::size_t>(l.yarn) >= g.yarns().size()) __builtin_trap();
+      for (knit::graph::LoopId p : g.parents(l.id))
+        if (p >= l.id) __builtin_trap();
+      parents += g.parents(l.id).size();
+      children += g.children(l.id).size();
+    }
+    if (parents != children) __builtin_trap();
+    for (const knit::graph::Crossing& x : g.crossings())
+      if (x.front == x.back || x.front >= g.num_loops() || x.back >= g.num_loops())
+        __builtin_trap();
+    for (knit::graph::LoopId l : c.free_live)
+      if (l >= g.num_loops() || g.loop(l).end != knit::graph::LoopEnd::LIVE) __builtin_trap();
+    for (knit::graph::LoopId l : c.ladders)
+      if (l >= g.num_loops() || g.loop(l).end != knit::graph::LoopEnd::DROPPED) __builtin_trap();
+  } catch (const std::invalid_argument&) {
+  }
+  return 0;
+}
