@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# The long relaxations that quick ones are compared against (docs/results.md: "The damped dynamic
-# relaxations kept as references"). For each pattern, the default damped relaxation of a
+# The long relaxations that quick ones are compared against (docs/results-relaxation.md: "Against long
+# damped relaxations"). For each pattern, the default damped relaxation of a
 # ROWS×COLS sample (damped dynamics, imex-contact at 6e-4 s with contact reuse 0.05) runs
 # REF_TIME simulated seconds from the generated yarn into OUT/PATTERN; it creeps and never
 # comes to rest by the force residual, so FIRE then finishes it to R < 1 cm/s² into

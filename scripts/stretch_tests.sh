@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The stretch tests of docs/results.md, reproducible with one command: stockinette, garter and
+# The stretch tests of docs/results-stretch.md, reproducible with one command: stockinette, garter and
 # 2×2 rib, each relaxed and pulled along the course, the wale and the bias with the yarn
 # model; then the elastic sheet (Baraff–Witkin), fitted to the stockinette's three runs at
 # small strain, pulled the same ways on each knit; one force–strain figure per direction
