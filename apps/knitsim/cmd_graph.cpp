@@ -152,4 +152,6 @@ void register_graph(CLI::App& app) {
   });
 }
 
+const bool graph_added = add_command(75, register_graph);
+
 }  // namespace knitsim

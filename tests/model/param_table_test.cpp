@@ -66,8 +66,11 @@ TEST(ParamTable, EachParameterGoesFromASceneToItsFieldAndTheSummary) {
     EXPECT_NE(param_json(d, p), param_json(d, Params{})) << d.name << ": the value did not change";
     EXPECT_EQ(params_json(p)[d.group][d.name], other_value(d)) << d.name;
     // and nothing else changed
-    for (const ParamDecl& e : param_table())
-      if (&e != &d) EXPECT_EQ(param_json(e, p), param_json(e, Params{})) << d.name << " set " << e.name;
+    for (const ParamDecl& e : param_table()) {
+      if (&e != &d) {
+        EXPECT_EQ(param_json(e, p), param_json(e, Params{})) << d.name << " set " << e.name;
+      }
+    }
   }
   nlohmann::json both = {{"integrator", "imex-contact"}, {"contact_reuse", 0.5}};
   EXPECT_EQ(parse_params(JsonReader(both, "test.json", "params"), Params{}).solver.contact_reuse,
@@ -106,8 +109,9 @@ TEST(ParamTable, TheProgramListsTheTable) {
     EXPECT_EQ(list[k]["default"], param_json(d, Params{})) << d.name;
     EXPECT_EQ(list[k]["relaxation"], param_json(d, Params::relaxation())) << d.name;
     EXPECT_EQ(list[k]["option"], d.option()) << d.name;
-    if (d.type == ParamType::REAL || d.type == ParamType::INTEGER)
+    if (d.type == ParamType::REAL || d.type == ParamType::INTEGER) {
       EXPECT_EQ(list[k]["range"], nlohmann::json({d.min, d.max})) << d.name;
+    }
   }
 }
 

@@ -190,7 +190,7 @@ TEST(SceneErrors, NumbersOutOfRangeAreNamedWithTheirValue) {
   expect_error(scene_with(R"(, "output_every": 0)"), {"output_every", "got 0"});
   expect_error(scene_with(R"(, "params": {"quadrature_points": 4})"), {"odd", "got 4"});
   expect_error(scene_with(R"(, "params": {"alpha_large": 1.5})"),
-               {"params.alpha_large", "got 1.5"});
+               {"params.alpha_large", "alpha_large = 1.5", "[0, 1]"});
   expect_error(scene_with(R"(, "objects": [{"box": {"size": [1, 0, 3]}}])"),
                {"objects[0].box.size[1]", "got 0"});
 }
