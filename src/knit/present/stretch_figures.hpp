@@ -15,7 +15,7 @@ namespace knit {
 /// titled with `label` (where gnuplot is installed), and, when `ended`, options.render and
 /// options.write_frames, the renders of the sample at strains 0, 0.25, 0.5 and 1 (those up to
 /// to_strain, and to_strain itself) side by side in stretch_renders.png (each also as
-/// renders/strain_<e>.png) and a movie of every frame in movie/animation.mp4. Returns the
+/// `renders/strain_<e>.png`) and a movie of every frame in movie/animation.mp4. Returns the
 /// summary's "renders" entry, or null when nothing was rendered.
 nlohmann::json write_stretch_figures(const StretchOptions& options,
                                      const std::vector<StretchSample>& curve,
