@@ -143,7 +143,7 @@ std::vector<Case> cases() {
       {"simulate " + file("alpha.json", R"({"knits": [{"state": ")" + KNIT + R"("}],
                      "params": {"alpha_small": 2}})") +
            " --out {OUT}",
-       {"params.alpha_small", "got 2"}},
+       {"params.alpha_small", "alpha_small = 2", "[0, 1]"}},
       {"simulate " + file("knit_far.json", R"({"knits": [{"state": ")" + KNIT + R"(",
                      "translate": [0, 0, 5e6]}]})") +
            " --out {OUT}",
