@@ -482,8 +482,16 @@ void Builder::knit_row(int r) {
 
   // stitch count and the shape of the row: [unworked] worked [w&t] [unworked]
   int taken = 0;
-  for (const Spec& s : spec) taken += s.take;
   const int live = static_cast<int>(m_live.size());
+  for (std::size_t i = 0; i < spec.size(); ++i) {
+    if (spec[i].op == Op::CABLE && taken + spec[i].take > live)
+      fail_cell(line, *work[i],
+                "a cable or twist of " + std::to_string(spec[i].take) + " stitches, but only " +
+                    std::to_string(std::max(0, live - taken)) +
+                    " are left on the needle there: expected a cable no wider than the "
+                    "stitches left");
+    taken += spec[i].take;
+  }
   if (taken != live)
     fail_line(line, "row " + std::to_string(r) + " works " + std::to_string(taken) +
                         " stitches, but " + std::to_string(live) + " are live after " +
@@ -544,7 +552,7 @@ void Builder::knit_row(int r) {
                           std::to_string(expected) + " stitches in on the row below: expected " +
                           std::to_string(expected) + " leading '-' cells");
   }
-  if (trailing > 0 || spec[last - 1].op == Op::WRAP) m_out.short_rows.push_back(r);
+  if (leading > 0 || trailing > 0 || spec[last - 1].op == Op::WRAP) m_out.short_rows.push_back(r);
 
   // the yarns: each used one's span of cells, for the floats of stranded colourwork
   std::map<int, std::pair<std::size_t, std::size_t>> span;  // yarn -> [first, last] cell

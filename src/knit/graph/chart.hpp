@@ -154,7 +154,8 @@ struct ChartResult {
   /// the stitches on the needle at the end, left to right, each its stack of loops
   /// (bottom first: a tucked or wrapped stitch holds two)
   std::vector<std::vector<LoopId>> live;
-  /// rows that turn before the end of the stitches (short rows)
+  /// short rows: rows that leave stitches unworked at an end (they turn before it, or
+  /// start where the row below turned)
   std::vector<int> short_rows;
 };
 
