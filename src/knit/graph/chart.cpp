@@ -422,6 +422,10 @@ void Builder::check_rows() {
 
 int Builder::yarn_of(const std::string& name, int row) {
   auto it = m_yarn.find(name);
+  if (it == m_yarn.end() && m_yarn.size() >= MAX_CHART_YARNS)
+    fail_line(m_out.row_line[static_cast<std::size_t>(row)],
+              "yarn '" + name + "' is the chart's " + std::to_string(MAX_CHART_YARNS + 1) +
+                  "th yarn name: expected at most " + std::to_string(MAX_CHART_YARNS));
   if (it == m_yarn.end() || it->second < 0) {
     const int y = g.add_yarn(name, row, false);
     m_yarn[name] = y;
@@ -594,6 +598,9 @@ void Builder::knit_row(int r) {
       for (const auto& [other, sp] : span)
         if (other != y && sp.first < i && i < sp.second)
           for (int k = 0; k < s.width(); ++k) {
+            if (m_out.floats.size() >= MAX_CHART_LOOPS)
+              fail_line(line, "the chart's yarns float past more than " +
+                                  std::to_string(MAX_CHART_LOOPS) + " stitches");
             g.add_miss(other, Bed::FRONT, c.column + k, dir, r);
             m_out.floats.push_back({other,
                                     g.yarns()[static_cast<std::size_t>(other)].steps.size() - 1,

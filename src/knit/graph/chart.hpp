@@ -88,7 +88,8 @@
 // cable wider than MAX_CABLE_STITCHES or than the stitches left, an m1 without a stitch on
 // each side, a bind-off followed by a stitch that makes a new loop without parents, an
 // unworked cell between worked ones, a short row that does not start where the yarn
-// turned, a chart over MAX_CHART_TEXT_BYTES or MAX_CHART_LOOPS.
+// turned, a chart over MAX_CHART_TEXT_BYTES, MAX_CHART_LOOPS (loops, or floats) or
+// MAX_CHART_YARNS.
 #include <cstddef>
 #include <string>
 #include <string_view>
@@ -102,6 +103,9 @@ namespace knit::graph {
 inline constexpr std::size_t MAX_CHART_TEXT_BYTES = 4u << 20;
 /// The most loops a chart may make (the graph takes about 100 bytes per loop).
 inline constexpr std::size_t MAX_CHART_LOOPS = 4u << 20;
+/// The most yarn names a chart may use (each a yarn; the floats of stranded colourwork
+/// grow with their number), and the most floats it may make: MAX_CHART_LOOPS.
+inline constexpr std::size_t MAX_CHART_YARNS = 64;
 /// The most stitches one cable or twist may cross.
 inline constexpr int MAX_CABLE_STITCHES = 64;
 
