@@ -139,6 +139,32 @@ TEST(Chart, WorkedCellsAPurlOnAWrongSideRowShowsAsAKnit) {
   }
 }
 
+TEST(Chart, WorkedCellsOnAWrongSideRowAreSeenFromTheOtherSide) {
+  // row 2 is worked from the wrong side: a slip with the yarn in front (towards the
+  // knitter) leaves the float on the wrong side; a knitted c4f shows purl faces from the
+  // front, and its held-in-front stitches (the first two worked, on the left as seen from
+  // the front) pass behind as seen from the front, going right
+  const ChartResult c = chart("cells: worked\nslwyif c4f\nk k k k k\n");
+  expect_clean(c);
+  ASSERT_EQ(c.floats.size(), 1u);
+  EXPECT_EQ(c.floats[0].side, FloatSide::BACK);
+  std::set<std::pair<LoopId, LoopId>> got, want;
+  for (const Crossing& x : c.graph.crossings()) got.insert({x.front, x.back});
+  for (int f : {2, 3})
+    for (int b : {4, 5}) want.insert({at(c, 2, f), at(c, 2, b)});
+  EXPECT_EQ(got, want);
+  EXPECT_EQ(parents_of(c.graph, at(c, 2, 4)), std::vector<LoopId>{at(c, 1, 2)});
+  for (int n = 2; n <= 5; ++n) EXPECT_EQ(c.graph.loop(at(c, 2, n)).face, Face::PURL);
+}
+
+TEST(Chart, TheDocumentsExamplesRead) {
+  for (const char* text : {"k k  k    k k\nk k  k    k k\nk yo k2tog k k\n",
+                           "bo bo bo bo\nk k k k\n", "k k . .\nk k bo bo\n"}) {
+    SCOPED_TRACE(text);
+    expect_clean(chart(text));
+  }
+}
+
 TEST(Chart, InTheRoundEveryRowIsWorkedFromTheRightSide) {
   const ChartResult c = chart("knit: round\nk k k\nk k k\n");
   expect_clean(c);

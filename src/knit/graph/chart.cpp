@@ -1,9 +1,11 @@
 #include "knit/graph/chart.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <filesystem>
 #include <fstream>
+#include <initializer_list>
 #include <map>
 #include <sstream>
 #include <stdexcept>
@@ -32,7 +34,8 @@ struct Spec {
   Op op = Op::KNIT;
   int take = 1;
   Face face = Face::KNIT;
-  std::vector<int> order;  // parents: indices into the taken stitches (left to right)
+  std::array<int, 3> order{};  // parents: indices into the taken stitches (left to right)
+  int parents = 0;             // entries of `order` used
   bool tbl = false;
   bool wyif = false;       // slip: the float in front (right side)
   bool leans_left = true;  // m1
@@ -45,12 +48,12 @@ struct Spec {
 };
 
 struct Cell {
-  std::string token;  // as written
-  std::string sym;    // normalised
-  int text_col = 0;   // 1-based
-  int index = 0;      // 1-based in its line
-  int column = 0;     // grid column of its left edge, 1-based
-  std::string yarn;
+  std::string_view token;  // as written (in the chart's text)
+  std::string sym;         // normalised (short: no allocation)
+  int text_col = 0;        // 1-based
+  int index = 0;           // 1-based in its line
+  int column = 0;          // grid column of its left edge, 1-based
+  std::string_view yarn;   // in the chart's text, or the default yarn's name
   Spec spec;
 };
 
@@ -165,11 +168,12 @@ bool cable_spec(const std::string& s, Spec& out, std::string& problem) {
 // the symbol's spec; false when unknown
 bool symbol_spec(const std::string& s, Spec& out, std::string& problem) {
   Spec sp;
-  auto knit = [&](int take, Face face, std::vector<int> order) {
+  auto knit = [&](int take, Face face, std::initializer_list<int> order) {
     sp.op = Op::KNIT;
     sp.take = take;
     sp.face = face;
-    sp.order = std::move(order);
+    sp.parents = 0;
+    for (int k : order) sp.order[static_cast<std::size_t>(sp.parents++)] = k;
   };
   const Face K = Face::KNIT, P = Face::PURL;
   if (s == "k") {
@@ -247,14 +251,14 @@ class Builder {
   [[noreturn]] void fail_cell(int line, const Cell& c, const std::string& what) const {
     throw std::invalid_argument(m_source + ":" + std::to_string(line) + ":" +
                                 std::to_string(c.text_col) + ": cell " + std::to_string(c.index) +
-                                " '" + c.token + "': " + what);
+                                " '" + std::string(c.token) + "': " + what);
   }
   void parse();
   void header(int line, std::string_view key, std::string_view value);
   void row_line(int line, std::string_view body);
   void check_rows();
   void knit_row(int r);
-  int yarn_of(const std::string& name, int row);
+  int yarn_of(std::string_view name, int row);
   LoopId make(int yarn, int row, int column, LoopKind kind, Face face, Direction d,
               std::span<const LoopId> parents, const std::string& symbol);
 
@@ -265,7 +269,7 @@ class Builder {
   std::string m_default_yarn = "A";
   std::vector<Row> m_rows;  // text order: the top row first
   bool m_seen_row = false;
-  std::map<std::string, int> m_yarn;  // name -> current piece (-1: cut)
+  std::map<std::string, int, std::less<>> m_yarn;  // name -> current piece (-1: cut)
   std::vector<std::vector<LoopId>> m_live;
   // short rows: unworked stitches at the end of the last row, and whether it wrapped
   int m_trailing = 0;
@@ -305,7 +309,7 @@ void Builder::row_line(int line, std::string_view body) {
   m_seen_row = true;
   Row row;
   row.line = line;
-  std::string row_yarn;
+  std::string_view row_yarn;
   std::size_t p = 0;
   const std::size_t base = static_cast<std::size_t>(body.data() - m_text.data());
   // text column of body[p]: from the line's start
@@ -323,23 +327,23 @@ void Builder::row_line(int line, std::string_view body) {
     p = q;
     ++index;
     Cell c;
-    c.token = std::string(tok);
+    c.token = tok;
     c.text_col = text_col;
     c.index = index;
     // @YARN: the row's yarn (first token only)
     if (tok[0] == '@') {
       if (index != 1) fail_cell(line, c, "a row's yarn (@NAME) comes before its first cell");
-      row_yarn = std::string(tok.substr(1));
+      row_yarn = tok.substr(1);
       if (!valid_yarn_name(row_yarn))
         fail_cell(line, c, "expected @NAME, a yarn name (letters, digits, '_'; at most 32)");
       index = 0;
       continue;
     }
     std::string_view sym_text = tok;
-    std::string yarn = row_yarn.empty() ? m_default_yarn : row_yarn;
+    std::string_view yarn = row_yarn.empty() ? std::string_view(m_default_yarn) : row_yarn;
     const std::size_t at = tok.find('@');
     if (at != std::string_view::npos) {
-      yarn = std::string(tok.substr(at + 1));
+      yarn = tok.substr(at + 1);
       sym_text = tok.substr(0, at);
       if (!valid_yarn_name(yarn))
         fail_cell(line, c, "expected SYMBOL@YARN, a yarn name (letters, digits, '_'; at most 32)");
@@ -420,15 +424,16 @@ void Builder::check_rows() {
   m_out.columns = top.width;
 }
 
-int Builder::yarn_of(const std::string& name, int row) {
+int Builder::yarn_of(std::string_view name, int row) {
   auto it = m_yarn.find(name);
   if (it == m_yarn.end() && m_yarn.size() >= MAX_CHART_YARNS)
     fail_line(m_out.row_line[static_cast<std::size_t>(row)],
-              "yarn '" + name + "' is the chart's " + std::to_string(MAX_CHART_YARNS + 1) +
-                  "th yarn name: expected at most " + std::to_string(MAX_CHART_YARNS));
+              "yarn '" + std::string(name) + "' is the chart's " +
+                  std::to_string(MAX_CHART_YARNS + 1) + "th yarn name: expected at most " +
+                  std::to_string(MAX_CHART_YARNS));
   if (it == m_yarn.end() || it->second < 0) {
-    const int y = g.add_yarn(name, row, false);
-    m_yarn[name] = y;
+    const int y = g.add_yarn(std::string(name), row, false);
+    m_yarn.insert_or_assign(std::string(name), y);
     return y;
   }
   return it->second;
@@ -619,8 +624,9 @@ void Builder::knit_row(int r) {
         auto st = take(s.take);
         parents.clear();
         if (s.op == Op::KNIT) {
-          for (int k : s.order)
-            for (LoopId l : st[static_cast<std::size_t>(k)]) parents.push_back(l);
+          for (int j = 0; j < s.parents; ++j)
+            for (LoopId l : st[static_cast<std::size_t>(s.order[static_cast<std::size_t>(j)])])
+              parents.push_back(l);
         } else {
           for (LoopId l : st[0]) parents.push_back(l);
         }
@@ -742,7 +748,7 @@ ChartResult Builder::run() {
     std::vector<const Cell*> work;
     for (const Cell& c : first.cells) work.push_back(&c);
     if (m_out.right_side[1]) std::reverse(work.begin(), work.end());
-    std::string name = m_default_yarn;
+    std::string_view name = m_default_yarn;
     for (const Cell* c : work)
       if (c->spec.op != Op::NONE && c->spec.op != Op::UNWORKED) {
         name = c->yarn;
@@ -768,6 +774,11 @@ ChartResult Builder::run() {
     if (m_live.empty()) fail_line(first.line, "row 1 works no stitch: nothing to cast on");
   }
   m_out.stitches.push_back(static_cast<int>(m_live.size()));
+  // about a loop per cell
+  std::size_t cells = m_live.size();
+  for (const Row& row : m_rows) cells += row.cells.size();
+  g.reserve(std::min(cells, MAX_CHART_LOOPS));
+  m_out.symbol.reserve(std::min(cells, MAX_CHART_LOOPS));
   for (int r = 1; r <= rows; ++r) {
     knit_row(r);
     m_out.stitches.push_back(static_cast<int>(m_live.size()));
