@@ -203,6 +203,28 @@ TEST(Chart, KnitPurlChartsGiveTheBuiltInPatternsFaces) {
   }
 }
 
+// the built-in patterns, tiled, through the chart path: one loop per stitch, the face
+// the pattern names, each loop pulled through the one below it
+TEST(Chart, BuiltInPatternsBuildThroughTheChartPath) {
+  for (const std::string& name : knit::builtin_pattern_names()) {
+    SCOPED_TRACE(name);
+    const knit::Pattern p = knit::tile(knit::builtin_pattern(name), 6, 8);
+    const ChartResult c = kp_rows_graph(p.rows, name);
+    expect_clean(c);
+    EXPECT_EQ(c.rows, 6);
+    EXPECT_EQ(c.columns, 8);
+    EXPECT_EQ(c.graph.num_loops(), 7u * 8u);
+    for (int r = 1; r <= 6; ++r)
+      for (int n = 1; n <= 8; ++n) {
+        const LoopId l = at(c, r, n);
+        EXPECT_EQ(c.graph.loop(l).face, p.is_knit(r - 1, n - 1) ? Face::KNIT : Face::PURL);
+        const LoopId below = r == 1 ? c.cast_on[static_cast<std::size_t>(n - 1)] : at(c, r - 1, n);
+        EXPECT_EQ(parents_of(c.graph, l), std::vector<LoopId>{below});
+      }
+  }
+  EXPECT_THROW(kp_rows_graph({"kp", "kx"}, "p"), std::invalid_argument);
+}
+
 TEST(Chart, KnitThroughTheBackLoopIsTwisted) {
   const ChartResult c = chart("k ktbl ptbl\n");
   expect_clean(c);

@@ -798,6 +798,18 @@ ChartResult read_chart_graph(std::string_view text, const std::string& source_na
   return b.run();
 }
 
+ChartResult kp_rows_graph(const std::vector<std::string>& rows, const std::string& source_name) {
+  std::string text;
+  for (auto it = rows.rbegin(); it != rows.rend(); ++it) {
+    if (it->find_first_not_of("kpKP") != std::string::npos || it->empty())
+      throw std::invalid_argument(source_name + ":" + std::to_string(it - rows.rbegin() + 1) +
+                                  ": expected a row of 'k' and 'p'");
+    text += *it;
+    text += '\n';
+  }
+  return read_chart_graph(text, source_name);
+}
+
 ChartResult load_chart_graph(const std::string& path) {
   namespace fs = std::filesystem;
   std::error_code ec;

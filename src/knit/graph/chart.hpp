@@ -86,7 +86,7 @@
 // column of the cell, with its index in the line): an unknown symbol or header, a row
 // whose cells take more or fewer stitches than are live, rows of different widths, a
 // cable wider than MAX_CABLE_STITCHES or than the stitches left, an m1 without a stitch on
-// each side, a bind-off followed by a stitch that makes a new loop without parents, an
+// each side, a bind-off followed by a yo, m1, slip, tuck, w&t or ds, an
 // unworked cell between worked ones, a short row that does not start where the yarn
 // turned, a chart over MAX_CHART_TEXT_BYTES, MAX_CHART_LOOPS (loops, or floats) or
 // MAX_CHART_YARNS.
@@ -166,6 +166,12 @@ struct ChartResult {
 /// Builds the knit graph of chart `text` (the format above); `source_name` names it in
 /// messages. Throws std::invalid_argument on a chart that cannot be knitted.
 ChartResult read_chart_graph(std::string_view text, const std::string& source_name);
+
+/// The graph of a k/p pattern's rows (knit::Pattern::rows: rows[0] the bottom row, each
+/// a string of 'k' and 'p' as seen from the front, all of one length), knit flat: the
+/// built-in patterns through the chart path (the k/p words are chart cells). Throws
+/// std::invalid_argument as read_chart_graph does (LINE counts the rows from the top).
+ChartResult kp_rows_graph(const std::vector<std::string>& rows, const std::string& source_name);
 
 /// Reads the chart at `path` (a regular file of at most MAX_CHART_TEXT_BYTES) and builds
 /// its graph; throws std::invalid_argument naming the path.
