@@ -26,7 +26,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     for (const auto& stack : r.live)
       for (g::LoopId l : stack) expected.insert(l);
     if (std::set<g::LoopId>(c.free_live.begin(), c.free_live.end()) != expected) __builtin_trap();
-    if (r.symbol.size() != graph.num_loops()) __builtin_trap();
+    if (r.loop_symbol.size() != graph.num_loops()) __builtin_trap();
+    for (std::uint32_t k : r.loop_symbol)
+      if (k >= r.symbols.size()) __builtin_trap();
     for (const g::Loop& l : graph.loops()) {
       if (l.yarn < 0 || static_cast<std::size_t>(l.yarn) >= graph.yarns().size()) __builtin_trap();
       for (g::LoopId p : graph.parents(l.id))

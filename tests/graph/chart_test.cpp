@@ -43,7 +43,7 @@ std::vector<LoopId> parents_of(const KnitGraph& g, LoopId id) {
 std::vector<LoopId> row_loops(const ChartResult& c, int row) {
   std::vector<LoopId> out;
   for (const Loop& l : c.graph.loops())
-    if (l.line == row && c.symbol[l.id] != "cast-on") out.push_back(l.id);
+    if (l.line == row && c.symbol_of(l.id) != "cast-on") out.push_back(l.id);
   std::stable_sort(out.begin(), out.end(), [&](LoopId a, LoopId b) {
     return c.graph.loop(a).needle < c.graph.loop(b).needle;
   });
@@ -54,7 +54,7 @@ std::vector<LoopId> row_loops(const ChartResult& c, int row) {
 LoopId at(const ChartResult& c, int row, int needle) {
   LoopId found = NO_LOOP;
   for (const Loop& l : c.graph.loops())
-    if (l.line == row && l.needle == needle && c.symbol[l.id] != "cast-on") {
+    if (l.line == row && l.needle == needle && c.symbol_of(l.id) != "cast-on") {
       if (found == NO_LOOP || l.kind == LoopKind::KNIT) found = l.id;
     }
   EXPECT_NE(found, NO_LOOP) << "no loop at row " << row << " needle " << needle;
@@ -77,7 +77,7 @@ void expect_clean(const ChartResult& c) {
     const LoopEnd want = expected.count(l.id) ? LoopEnd::LIVE : LoopEnd::CONSUMED;
     EXPECT_EQ(l.end, want) << "loop " << l.id;
   }
-  EXPECT_EQ(c.symbol.size(), c.graph.num_loops());
+  EXPECT_EQ(c.loop_symbol.size(), c.graph.num_loops());
 }
 
 // the needles a yarn's steps visit in one row, in order, as "L3" (a loop) or "M3" (a miss)
@@ -631,12 +631,13 @@ TEST(ChartSamples, CablePanelCrossesItsCablesEveryCrossingRow) {
   // every row keeps the stitch count; each c6f row crosses 3 x 3 pairs per cable
   for (int s : c.stitches) EXPECT_EQ(s, c.stitches.front());
   std::size_t cable_cells = 0;
-  for (const std::string& s : c.symbol) cable_cells += s == "c6f" || s == "c6b";
+  for (const Loop& l : c.graph.loops())
+    cable_cells += c.symbol_of(l.id) == "c6f" || c.symbol_of(l.id) == "c6b";
   EXPECT_EQ(c.graph.crossings().size(), cable_cells / 6 * 9);
   EXPECT_GT(cable_cells, 0u);
   // the background stays reverse stockinette beside the cables: purl faces
   for (const Loop& l : c.graph.loops())
-    if (c.symbol[l.id] == "p") {
+    if (c.symbol_of(l.id) == "p") {
       EXPECT_EQ(l.face, Face::PURL);
     }
 }
@@ -648,7 +649,7 @@ TEST(ChartSamples, LaceRowsBalanceEachYarnOverWithADecrease) {
   for (int s : c.stitches) EXPECT_EQ(s, c.stitches.front());
   // each yarn-over is a new loop with no parents, knit into by the row above
   for (const Loop& l : c.graph.loops())
-    if (c.symbol[l.id] == "yo") {
+    if (c.symbol_of(l.id) == "yo") {
       EXPECT_TRUE(c.graph.parents(l.id).empty());
       EXPECT_EQ(c.graph.children(l.id).size(), 1u);
     }
@@ -666,10 +667,10 @@ TEST(ChartSamples, EdgeDecreasesMakeATrapezoid) {
   // the decreases lean with the edges: ssk (leaning left) at the right edge, k2tog
   // (leaning right) at the left
   for (const Loop& l : c.graph.loops()) {
-    if (c.symbol[l.id] == "ssk") {
+    if (c.symbol_of(l.id) == "ssk") {
       EXPECT_GT(l.needle, 8);
     }
-    if (c.symbol[l.id] == "k2tog") {
+    if (c.symbol_of(l.id) == "k2tog") {
       EXPECT_LT(l.needle, 8);
     }
   }

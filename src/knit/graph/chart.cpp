@@ -255,9 +255,9 @@ class Builder {
   }
   void parse();
   void header(int line, std::string_view key, std::string_view value);
-  void row_line(int line, std::string_view body);
-  void check_rows();
-  void knit_row(int r);
+  Row parse_row(int line, std::string_view body) const;
+  std::uint32_t symbol_id(const std::string& symbol);
+  void knit_row(int r, const Row& row);
   int yarn_of(std::string_view name, int row);
   LoopId make(int yarn, int row, int column, LoopKind kind, Face face, Direction d,
               std::span<const LoopId> parents, const std::string& symbol);
@@ -267,7 +267,9 @@ class Builder {
   ChartResult m_out;
   KnitGraph& g = m_out.graph;
   std::string m_default_yarn = "A";
-  std::vector<Row> m_rows;  // text order: the top row first
+  /// the row lines (line number, text without its comment), the top row first
+  std::vector<std::pair<int, std::string_view>> m_rows;
+  std::map<std::string, std::uint32_t, std::less<>> m_symbol_id;
   bool m_seen_row = false;
   std::map<std::string, int, std::less<>> m_yarn;  // name -> current piece (-1: cut)
   std::vector<std::vector<LoopId>> m_live;
@@ -305,8 +307,7 @@ void Builder::header(int line, std::string_view key, std::string_view value) {
   }
 }
 
-void Builder::row_line(int line, std::string_view body) {
-  m_seen_row = true;
+Row Builder::parse_row(int line, std::string_view body) const {
   Row row;
   row.line = line;
   std::string_view row_yarn;
@@ -380,8 +381,16 @@ void Builder::row_line(int line, std::string_view body) {
   }
   if (row.cells.empty()) fail_line(line, "a row with a yarn and no cells: expected stitch cells");
   row.width = column - 1;
-  if (m_rows.size() >= 1u << 20) fail_line(line, "more than 1048576 rows");
-  m_rows.push_back(std::move(row));
+  return row;
+}
+
+std::uint32_t Builder::symbol_id(const std::string& symbol) {
+  auto it = m_symbol_id.find(symbol);
+  if (it != m_symbol_id.end()) return it->second;
+  const auto id = static_cast<std::uint32_t>(m_out.symbols.size());
+  m_out.symbols.push_back(symbol);
+  m_symbol_id.emplace(symbol, id);
+  return id;
 }
 
 void Builder::parse() {
@@ -402,26 +411,17 @@ void Builder::parse() {
       const std::size_t colon = t.find(':');
       if (colon != std::string_view::npos && std::isalpha(static_cast<unsigned char>(t[0])))
         header(line, t.substr(0, colon), t.substr(colon + 1));
-      else
-        row_line(line, body);
+      else {
+        if (m_rows.size() >= 1u << 20) fail_line(line, "more than 1048576 rows");
+        m_seen_row = true;
+        m_rows.emplace_back(line, body);
+      }
     }
     if (e == m_text.size()) break;
     p = e + 1;
   }
   if (m_rows.empty())
     throw std::invalid_argument(m_source + ": no chart rows: expected at least one");
-}
-
-// checks that need only the rows: widths, where unworked cells go
-void Builder::check_rows() {
-  const Row& top = m_rows.front();
-  for (const Row& row : m_rows)
-    if (row.width != top.width)
-      fail_line(row.line, "the row covers " + std::to_string(row.width) +
-                              " grid columns, expected " + std::to_string(top.width) +
-                              " like line " + std::to_string(top.line) +
-                              " (fill with '.' no-stitch cells; a cable covers its stitches)");
-  m_out.columns = top.width;
 }
 
 int Builder::yarn_of(std::string_view name, int row) {
@@ -456,13 +456,17 @@ LoopId Builder::make(int yarn, int row, int column, LoopKind kind, Face face, Di
   l.line = row;
   const LoopId id = g.add_loop(l, parents);
   for (LoopId p : parents) g.consume_loop(p, row);
-  m_out.symbol.push_back(symbol);
+  m_out.loop_symbol.push_back(symbol_id(symbol));
   return id;
 }
 
-void Builder::knit_row(int r) {
-  const Row& row = m_rows[m_rows.size() - static_cast<std::size_t>(r)];
+void Builder::knit_row(int r, const Row& row) {
   const int line = row.line;
+  if (row.width != m_out.columns)
+    fail_line(line, "the row covers " + std::to_string(row.width) + " grid columns, expected " +
+                        std::to_string(m_out.columns) + " like line " +
+                        std::to_string(m_rows.front().first) +
+                        " (fill with '.' no-stitch cells; a cable covers its stitches)");
   const bool rs = m_out.in_the_round || r % 2 == 1;
   const bool flip_ws = m_out.worked_cells && !rs;
   const Direction dir = rs ? Direction::MINUS : Direction::PLUS;
@@ -732,19 +736,20 @@ void Builder::knit_row(int r) {
 
 ChartResult Builder::run() {
   parse();
-  check_rows();
+  // the top row sets the grid's width
+  m_out.columns = parse_row(m_rows.front().first, m_rows.front().second).width;
   const int rows = static_cast<int>(m_rows.size());
   m_out.rows = rows;
   m_out.row_line.assign(static_cast<std::size_t>(rows) + 1, 0);
   m_out.right_side.assign(static_cast<std::size_t>(rows) + 1, true);
   for (int r = 1; r <= rows; ++r) {
-    m_out.row_line[r] = m_rows[m_rows.size() - static_cast<std::size_t>(r)].line;
+    m_out.row_line[r] = m_rows[m_rows.size() - static_cast<std::size_t>(r)].first;
     m_out.right_side[r] = m_out.in_the_round || r % 2 == 1;
   }
   // the cast-on: as many loops as row 1 takes, left to right, by the yarn of row 1's
   // first stitch (in working order), under the cells that take them
+  const Row first = parse_row(m_rows.back().first, m_rows.back().second);
   {
-    const Row& first = m_rows.back();
     std::vector<const Cell*> work;
     for (const Cell& c : first.cells) work.push_back(&c);
     if (m_out.right_side[1]) std::reverse(work.begin(), work.end());
@@ -767,20 +772,24 @@ ChartResult Builder::run() {
         l.kind = LoopKind::NEW;
         l.direction = Direction::PLUS;
         const LoopId id = g.add_loop(l, {});
-        m_out.symbol.push_back("cast-on");
+        m_out.loop_symbol.push_back(symbol_id("cast-on"));
         m_out.cast_on.push_back(id);
         m_live.push_back({id});
       }
     if (m_live.empty()) fail_line(first.line, "row 1 works no stitch: nothing to cast on");
   }
   m_out.stitches.push_back(static_cast<int>(m_live.size()));
-  // about a loop per cell
-  std::size_t cells = m_live.size();
-  for (const Row& row : m_rows) cells += row.cells.size();
-  g.reserve(std::min(cells, MAX_CHART_LOOPS));
-  m_out.symbol.reserve(std::min(cells, MAX_CHART_LOOPS));
+  // about a loop per two bytes of text ("k ")
+  const std::size_t guess = std::min(m_live.size() + m_text.size() / 2, MAX_CHART_LOOPS);
+  g.reserve(guess);
+  m_out.loop_symbol.reserve(guess);
   for (int r = 1; r <= rows; ++r) {
-    knit_row(r);
+    if (r == 1) {
+      knit_row(1, first);
+    } else {
+      const auto& [line, body] = m_rows[m_rows.size() - static_cast<std::size_t>(r)];
+      knit_row(r, parse_row(line, body));
+    }
     m_out.stitches.push_back(static_cast<int>(m_live.size()));
   }
   // yarns still in go out after the last row

@@ -91,6 +91,7 @@
 // turned, a chart over MAX_CHART_TEXT_BYTES, MAX_CHART_LOOPS (loops, or floats) or
 // MAX_CHART_YARNS.
 #include <cstddef>
+#include <cstdint>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -145,8 +146,12 @@ struct ChartResult {
   std::vector<bool> right_side;
   /// stitches[r]: live stitches after row r (stitches[0]: cast on)
   std::vector<int> stitches;
-  /// the cell symbol (normalised: "k2tog", "c4f", "cast-on") that made each loop
-  std::vector<std::string> symbol;
+  /// the cell symbols used (normalised: "k2tog", "c4f", "cast-on"), each once
+  std::vector<std::string> symbols;
+  /// per loop: the index in `symbols` of the cell that made it
+  std::vector<std::uint32_t> loop_symbol;
+  /// the cell symbol that made loop `id`
+  const std::string& symbol_of(LoopId id) const { return symbols[loop_symbol[id]]; }
   std::vector<LoopId> cast_on;
   /// loops pulled through their parents' back legs (ktbl, ptbl): the parents' legs cross
   std::vector<LoopId> twisted;
