@@ -11,7 +11,10 @@
 //     `cells: rs` (default: each cell shows the stitch as it looks from the right side, as
 //     printed charts do — on a wrong-side row the knitter works the opposite: a `k` cell
 //     is purled) or `cells: worked` (each cell names what the knitter does on that row, as
-//     written instructions do: `k` on a wrong-side row shows as a purl from the front);
+//     written instructions do: `k` on a wrong-side row shows as a purl from the front —
+//     there every face is the opposite, a slip's float lies on the other side, an m1
+//     leans the other way, a cable X/Y worked from the wrong side shows from the front
+//     as a Y/X cable crossing the same way, and a decrease keeps its parents' order);
 //     `yarn: NAME` (the yarn of cells that name none; default A).
 //   - Row lines: cells separated by spaces, tabs or commas. The LAST row line is row 1 at
 //     the bottom; the chart is a picture of the right side: a line's first cell is at the
