@@ -225,6 +225,25 @@ TEST(Chart, BuiltInPatternsBuildThroughTheChartPath) {
   EXPECT_THROW(kp_rows_graph({"kp", "kx"}, "p"), std::invalid_argument);
 }
 
+// a k/p chart file of the k/p chart reader (knit/pattern) reads here with the faces that
+// reader gives it
+TEST(Chart, KnitPurlChartFilesReadAsTheKnitPurlReaderReadsThem) {
+  for (const std::string& path :
+       {DATA + "/patterns/rib_and_seed.chart",
+        std::string(KNIT_SOURCE_DIR) + "/fuzz/seeds/chart/case_tabs.chart"}) {
+    SCOPED_TRACE(path);
+    const knit::Pattern p = knit::load_pattern(path);
+    const ChartResult c = load_chart_graph(path);
+    expect_clean(c);
+    ASSERT_EQ(c.rows, p.num_rows());
+    ASSERT_EQ(c.columns, p.num_cols());
+    for (int r = 1; r <= c.rows; ++r)
+      for (int n = 1; n <= c.columns; ++n)
+        EXPECT_EQ(c.graph.loop(at(c, r, n)).face,
+                  p.is_knit(r - 1, n - 1) ? Face::KNIT : Face::PURL);
+  }
+}
+
 TEST(Chart, KnitThroughTheBackLoopIsTwisted) {
   const ChartResult c = chart("k ktbl ptbl\n");
   expect_clean(c);
@@ -272,6 +291,15 @@ TEST(Chart, DecreasesStackTheirParentsInLeaningOrder) {
     EXPECT_EQ(parents_of(c.graph, at(c, 1, 1)), std::vector<LoopId>{c.cast_on.front()});
     EXPECT_EQ(parents_of(c.graph, at(c, 1, 3)), std::vector<LoopId>{c.cast_on.back()});
   }
+}
+
+TEST(Chart, WorkedDecreaseOnAWrongSideRowKeepsItsParentsOrder) {
+  // a k2tog knitted from the wrong side: a purl from the front, the loop on the left (as
+  // seen from the front) still on top
+  const ChartResult c = chart("cells: worked\nk k2tog k .\nk k k k\n");
+  expect_clean(c);
+  EXPECT_EQ(c.graph.loop(at(c, 2, 2)).face, Face::PURL);
+  EXPECT_EQ(parents_of(c.graph, at(c, 2, 2)), (std::vector<LoopId>{at(c, 1, 3), at(c, 1, 2)}));
 }
 
 TEST(Chart, DecreaseOnAWrongSideRowLeansAsItsCellShows) {
@@ -554,6 +582,29 @@ TEST(Chart, StrandedColourworkFloatsTheOtherYarnBehind) {
   EXPECT_EQ(steps_in_row(c, a, 1), (std::vector<std::string>{"L3", "M2", "L1"}));
   ASSERT_EQ(c.floats.size(), 2u);
   for (const ChartFloat& f : c.floats) EXPECT_EQ(f.side, FloatSide::BACK);
+}
+
+TEST(Chart, StrandedRoundsFloatEachYarnBehindTheOther) {
+  // two rounds of a two-colour check, worked right to left each round
+  const ChartResult c = chart("knit: round\nk@B k@B k@A k@A\nk@A k@A k@B k@B\n");
+  expect_clean(c);
+  ASSERT_EQ(c.graph.yarns().size(), 2u);
+  // round 1: B (columns 3, 4) first, then A (columns 1, 2)
+  const int b = c.graph.loop(at(c, 1, 4)).yarn, a = c.graph.loop(at(c, 1, 2)).yarn;
+  EXPECT_EQ(c.graph.yarns()[static_cast<std::size_t>(a)].carrier, "A");
+  EXPECT_EQ(steps_in_row(c, b, 1), (std::vector<std::string>{"L4", "L3"}));
+  EXPECT_EQ(steps_in_row(c, a, 1), (std::vector<std::string>{"L2", "L1"}));
+  // round 2: A (columns 3, 4) first, then B (columns 1, 2): neither passes the other's
+  // stitches between two of its own
+  EXPECT_EQ(steps_in_row(c, a, 2), (std::vector<std::string>{"L4", "L3"}));
+  EXPECT_EQ(steps_in_row(c, b, 2), (std::vector<std::string>{"L2", "L1"}));
+  EXPECT_TRUE(c.floats.empty());
+  // a third colour between two stitches of A floats A behind it
+  const ChartResult d = chart("knit: round\nk@A k@C k@A\n");
+  const int da = d.graph.loop(at(d, 1, 1)).yarn;
+  EXPECT_EQ(steps_in_row(d, da, 1), (std::vector<std::string>{"L3", "M2", "L1"}));
+  ASSERT_EQ(d.floats.size(), 1u);
+  EXPECT_EQ(d.floats[0].side, FloatSide::BACK);
 }
 
 TEST(Chart, IntarsiaBlocksKeepTheirOwnYarns) {
