@@ -165,6 +165,14 @@ TEST(Chart, TheDocumentsExamplesRead) {
   }
 }
 
+TEST(Chart, ReadsCommasTabsCarriageReturnsAndAByteOrderMark) {
+  const ChartResult c = chart("\xEF\xBB\xBFK,\tP , k\r\nk p k\r\n");
+  expect_clean(c);
+  EXPECT_EQ(c.columns, 3);
+  EXPECT_EQ(c.graph.loop(at(c, 2, 2)).face, Face::PURL);
+  EXPECT_EQ(c.row_line, (std::vector<int>{0, 2, 1}));
+}
+
 TEST(Chart, InTheRoundEveryRowIsWorkedFromTheRightSide) {
   const ChartResult c = chart("knit: round\nk k k\nk k k\n");
   expect_clean(c);

@@ -397,7 +397,8 @@ void Builder::parse() {
   if (m_text.size() > MAX_CHART_TEXT_BYTES)
     throw std::invalid_argument(m_source + ": a chart of " + std::to_string(m_text.size()) +
                                 " bytes: expected at most " + std::to_string(MAX_CHART_TEXT_BYTES));
-  std::size_t p = 0;
+  // a UTF-8 byte-order mark, as some editors write, is not a cell
+  std::size_t p = m_text.substr(0, 3) == "\xEF\xBB\xBF" ? 3 : 0;
   int line = 0;
   while (p <= m_text.size()) {
     std::size_t e = m_text.find('\n', p);
