@@ -11,7 +11,7 @@ cd "$(dirname "$0")/.."
 seconds=${1:-60}
 build_dir=${KNIT_FUZZ_BUILD_DIR:-build-fuzz}
 jobs=${KNIT_JOBS:-1}
-targets=(fuzz_yarns fuzz_bcc fuzz_obj fuzz_kstate fuzz_scene fuzz_chart fuzz_knitout)
+targets=(fuzz_yarns fuzz_bcc fuzz_obj fuzz_kstate fuzz_scene fuzz_chart fuzz_knitout fuzz_chart_graph)
 
 scripts/setup.sh --install-only
 # libclang-rt-dev is the runtime (libclang_rt.fuzzer) of the default clang (14 on Debian 12)
@@ -63,6 +63,10 @@ for t in "${targets[@]}"; do
     fuzz_knitout)
       cp -n fuzz/seeds/knitout/* "$corpus"/
       max_len=8192
+      ;;
+    fuzz_chart_graph)
+      cp -n fuzz/seeds/chart_graph/* "$corpus"/
+      max_len=4096
       ;;
   esac
   echo "fuzz: $t for ${seconds}s"
