@@ -124,9 +124,8 @@ void register_export(CLI::App& app) {
       "export", "export a state (.kstate, or .yarns/.bcc/.obj) or a directory of states");
   add_required_path(sub, "input", args->input, "state file or directory of .kstate files")
       ->check(existing_path());
-  add_choice(sub, "--format,-f", args->format,
-             knit::export_format_list(),
-             knit::export_formats(), "none (required)")
+  add_choice(sub, "--format,-f", args->format, knit::export_format_list(), knit::export_formats(),
+             "none (required)")
       ->required();
   add_out_option(sub, args->out, "output file (a directory for several obj/bcc/ply)");
   add_integer(sub, "--samples", args->samples,

@@ -39,10 +39,13 @@ void register_params(CLI::App& app) {
     if (o->json) {
       nlohmann::json list = nlohmann::json::array();
       for (const knit::ParamDecl& d : knit::param_table()) {
-        nlohmann::json e = {{"name", d.name},   {"group", d.group},
-                            {"unit", d.unit},   {"default", knit::param_json(d, knit::Params{})},
+        nlohmann::json e = {{"name", d.name},
+                            {"group", d.group},
+                            {"unit", d.unit},
+                            {"default", knit::param_json(d, knit::Params{})},
                             {"relaxation", knit::param_json(d, knit::Params::relaxation())},
-                            {"doc", d.doc},     {"option", d.option()}};
+                            {"doc", d.doc},
+                            {"option", d.option()}};
         if (d.type == knit::ParamType::REAL || d.type == knit::ParamType::INTEGER)
           e["range"] = {d.min, d.max};
         if (d.type == knit::ParamType::CHOICE) e["choices"] = d.choices();
@@ -53,8 +56,8 @@ void register_params(CLI::App& app) {
     }
     for (const knit::ParamDecl& d : knit::param_table())
       std::cout << d.group << "." << d.name << " = " << d.default_text()
-                << (d.unit[0] ? std::string(" ") + d.unit : std::string()) << "  "
-                << range_of(d) << "  " << d.doc << "\n";
+                << (d.unit[0] ? std::string(" ") + d.unit : std::string()) << "  " << range_of(d)
+                << "  " << d.doc << "\n";
   });
 }
 

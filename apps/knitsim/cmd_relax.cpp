@@ -155,15 +155,19 @@ void register_relax(CLI::App& app) {
           const knit::KnitRelaxSettings& s = *f.knit->relaxation;
           fire_from_state = s.fire && !given("--fire");
           if (!given("--fire")) o->fire = s.fire;
-          if (!given("--integrator")) o->integrator = knit::integrator_name(s.params.solver.integrator);
+          if (!given("--integrator"))
+            o->integrator = knit::integrator_name(s.params.solver.integrator);
           if (!given("--time-step")) o->time_step = s.params.solver.time_step;
           if (!given("--implicit-bending")) o->implicit_bending = s.params.solver.implicit_bending;
           if (!given("--contact-solve-tolerance"))
             o->contact_solve_tolerance = s.params.solver.contact_solve_tolerance;
           if (!given("--contact-reuse")) o->contact_reuse = s.params.solver.contact_reuse;
-          if (!given("--max-step-halvings")) o->max_step_halvings = s.params.solver.max_step_halvings;
-          if (!given("--contact-points")) o->contact_points = s.params.discretisation.contact_points;
-          if (!given("--end-mass-floor")) o->end_mass_floor = s.params.discretisation.end_mass_floor;
+          if (!given("--max-step-halvings"))
+            o->max_step_halvings = s.params.solver.max_step_halvings;
+          if (!given("--contact-points"))
+            o->contact_points = s.params.discretisation.contact_points;
+          if (!given("--end-mass-floor"))
+            o->end_mass_floor = s.params.discretisation.end_mass_floor;
           if (!given("--k-global")) o->material.k_global = s.params.material.k_global;
           if (!given("--alpha-small")) o->material.alpha_small = s.params.material.alpha_small;
           if (!given("--alpha-large")) o->material.alpha_large = s.params.material.alpha_large;

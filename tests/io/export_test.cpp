@@ -1,5 +1,5 @@
-#include "knit/io/obj.hpp"
 #include "knit/io/export.hpp"
+#include "knit/io/obj.hpp"
 
 #include <gtest/gtest.h>
 

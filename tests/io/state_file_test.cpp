@@ -181,7 +181,9 @@ TEST(StateFile, RelaxationSettingsRoundTrip) {
   using Spoil = void (*)(KnitRelaxSettings&);
   const std::vector<std::pair<Spoil, std::string>> spoiled = {
       {[](KnitRelaxSettings& b) { b.params.solver.time_step = -1; }, "time_step"},
-      {[](KnitRelaxSettings& b) { b.params.solver.time_step = std::numeric_limits<double>::quiet_NaN(); },
+      {[](KnitRelaxSettings& b) {
+         b.params.solver.time_step = std::numeric_limits<double>::quiet_NaN();
+       },
        "time_step"},
       {[](KnitRelaxSettings& b) { b.check_every = 0; }, "check_every"},
       {[](KnitRelaxSettings& b) { b.contact_reuse_widen = 0.5; }, "contact_reuse_widen"},

@@ -409,5 +409,4 @@ void export_vtp(const StateFile& state, const std::string& path, int per_segment
   write_file_atomic(path, vtp_text(state, per_segment));
 }
 
-
 }  // namespace knit

@@ -49,19 +49,30 @@ std::string lower_extension(const std::string& path) {
 
 const std::vector<FileFormat>& file_formats() {
   static const std::vector<FileFormat> formats = {
-      {"usd", {".usda", ".usd"}, "exact B-spline curves (USD text; a sequence time-sampled)",
-       usd_bytes, nullptr},
+      {"usd",
+       {".usda", ".usd"},
+       "exact B-spline curves (USD text; a sequence time-sampled)",
+       usd_bytes,
+       nullptr},
       {"obj", {".obj"}, "sampled centrelines as polylines", obj_bytes, parse_obj},
       {"bcc", {".bcc"}, "sampled centrelines (binary curve collection)", bcc_bytes, parse_bcc},
       {"ply", {".ply"}, "sampled centrelines as points and edges", ply_state_bytes, nullptr},
-      {"vtp", {".vtp"},
+      {"vtp",
+       {".vtp"},
        "sampled centrelines with per-point radius, yarn, row, column, velocity (ParaView)",
-       vtp_bytes, nullptr},
+       vtp_bytes,
+       nullptr},
       {"obj-mesh", {".obj"}, "yarn tubes as triangles", obj_mesh_bytes, nullptr},
       {"ply-mesh", {".ply"}, "yarn tubes as triangles", ply_mesh_state_bytes, nullptr},
-      {"glb", {".glb"}, "yarn tubes as triangles (glTF binary, metres, Y up)", glb_state_bytes,
+      {"glb",
+       {".glb"},
+       "yarn tubes as triangles (glTF binary, metres, Y up)",
+       glb_state_bytes,
        nullptr},
-      {"yarns", {".yarns"}, "yarn polylines with radii (textiles-lab smobj)", nullptr,
+      {"yarns",
+       {".yarns"},
+       "yarn polylines with radii (textiles-lab smobj)",
+       nullptr,
        parse_yarns_file},
   };
   return formats;
@@ -87,7 +98,8 @@ const FileFormat* import_format(const std::string& path) {
 std::string export_format_list() {
   std::string list;
   for (const FileFormat& f : file_formats())
-    if (f.write) list += (list.empty() ? "" : ", ") + std::string(f.name) + " (" + f.description + ")";
+    if (f.write)
+      list += (list.empty() ? "" : ", ") + std::string(f.name) + " (" + f.description + ")";
   return list;
 }
 

@@ -14,9 +14,7 @@
 #include "knit/spline/fit.hpp"
 
 namespace knit {
-namespace {
-
-}  // namespace
+namespace {}  // namespace
 
 std::string read_yarn_file(const std::string& path) {
   return read_input_file(path, MAX_GEOMETRY_BYTES, "yarn geometry file");

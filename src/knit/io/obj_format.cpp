@@ -98,8 +98,8 @@ ObjGeometry parse_obj_geometry(std::string_view data, const std::string& name) {
       const long long i = r.index > 0 ? r.index - 1 : r.nverts + r.index;
       if (i < 0 || i >= nv)
         throw std::runtime_error(name + ": line " + std::to_string(r.line) + ": vertex index " +
-                                 std::to_string(r.index) + " out of range (" +
-                                 std::to_string(nv) + " vertices)");
+                                 std::to_string(r.index) + " out of range (" + std::to_string(nv) +
+                                 " vertices)");
       ids.push_back(i);
     }
     return ids;
@@ -133,8 +133,7 @@ std::vector<RawYarn> parse_obj(std::string_view data, const std::string& name) {
 }
 
 TriangleMesh read_obj_mesh(const std::string& path, double scale) {
-  const ObjGeometry g =
-      parse_obj_geometry(read_input_file(path, MAX_GEOMETRY_BYTES, "mesh"), path);
+  const ObjGeometry g = parse_obj_geometry(read_input_file(path, MAX_GEOMETRY_BYTES, "mesh"), path);
   if (g.faces.empty()) throw std::runtime_error(path + ": the mesh has no faces ('f' statements)");
   TriangleMesh mesh;
   for (const Eigen::Vector3d& v : g.vertices) mesh.vertices.push_back(scale * v);

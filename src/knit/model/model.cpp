@@ -166,9 +166,9 @@ Model ModelBuilder::build(const Params& params, double rest_scale) const {
 
 const std::vector<std::string>& relax_setting_params() {
   static const std::vector<std::string> names = {
-      "integrator",       "time_step",      "implicit_bending", "contact_solve_tolerance",
-      "contact_reuse",    "max_step_halvings", "contact_points", "end_mass_floor",
-      "k_global",         "alpha_small",    "alpha_large"};
+      "integrator",    "time_step",         "implicit_bending", "contact_solve_tolerance",
+      "contact_reuse", "max_step_halvings", "contact_points",   "end_mass_floor",
+      "k_global",      "alpha_small",       "alpha_large"};
   return names;
 }
 

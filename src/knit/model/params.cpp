@@ -13,17 +13,24 @@ namespace {
 
 template <typename T>
 constexpr ParamType param_type() {
-  if constexpr (std::is_same_v<T, bool>) return ParamType::BOOLEAN;
-  else if constexpr (std::is_enum_v<T>) return ParamType::CHOICE;
-  else if constexpr (std::is_integral_v<T>) return ParamType::INTEGER;
-  else return ParamType::REAL;
+  if constexpr (std::is_same_v<T, bool>)
+    return ParamType::BOOLEAN;
+  else if constexpr (std::is_enum_v<T>)
+    return ParamType::CHOICE;
+  else if constexpr (std::is_integral_v<T>)
+    return ParamType::INTEGER;
+  else
+    return ParamType::REAL;
 }
 
 template <typename T>
 T from_double(double v) {
-  if constexpr (std::is_same_v<T, bool>) return v != 0;
-  else if constexpr (std::is_enum_v<T>) return static_cast<T>(static_cast<int>(v));
-  else return static_cast<T>(v);
+  if constexpr (std::is_same_v<T, bool>)
+    return v != 0;
+  else if constexpr (std::is_enum_v<T>)
+    return static_cast<T>(static_cast<int>(v));
+  else
+    return static_cast<T>(v);
 }
 
 const std::vector<std::string> NO_CHOICES;
@@ -31,15 +38,15 @@ const std::vector<std::string> NO_CHOICES;
 }  // namespace
 
 const std::vector<ParamDecl>& param_table() {
-#define KNIT_PARAM_DECL(group, type, name, def, lo, hi, unit, doc)                  \
-  ParamDecl{#name,                                                                \
-            #group,                                                               \
-            param_type<type>(),                                                   \
-            static_cast<double>(lo),                                              \
-            static_cast<double>(hi),                                              \
-            unit,                                                                 \
-            doc,                                                                  \
-            [](const Params& p) { return static_cast<double>(p.group.name); },    \
+#define KNIT_PARAM_DECL(group, type, name, def, lo, hi, unit, doc)             \
+  ParamDecl{#name,                                                             \
+            #group,                                                            \
+            param_type<type>(),                                                \
+            static_cast<double>(lo),                                           \
+            static_cast<double>(hi),                                           \
+            unit,                                                              \
+            doc,                                                               \
+            [](const Params& p) { return static_cast<double>(p.group.name); }, \
             [](Params& p, double v) { p.group.name = from_double<type>(v); }},
   static const std::vector<ParamDecl> table = {
 #define KNIT_MATERIAL(type, name, def, lo, hi, unit, doc) \

@@ -85,9 +85,9 @@ struct ParamDecl {
   const char* name;   ///< the field, the key in a scene's "params" and the summary's
   const char* group;  ///< "material", "discretisation" or "solver"
   ParamType type;
-  double min, max;    ///< the working range, inclusive (numbers only)
-  const char* unit;   ///< "" when dimensionless
-  const char* doc;    ///< one line
+  double min, max;   ///< the working range, inclusive (numbers only)
+  const char* unit;  ///< "" when dimensionless
+  const char* doc;   ///< one line
   double (*get)(const Params&);
   void (*set)(Params&, double);
   /// the names a choice takes, in index order (empty for other types)

@@ -24,7 +24,6 @@ void init_openvdb() {
   std::call_once(once, [] { openvdb::initialize(); });
 }
 
-
 class MeshShape : public Shape {
  public:
   MeshShape(openvdb::FloatGrid::Ptr grid, Eigen::AlignedBox3d box)
@@ -79,7 +78,6 @@ class MeshShape : public Shape {
 };
 
 }  // namespace
-
 
 long long open_edges(const TriangleMesh& mesh) {
   std::unordered_map<unsigned long long, int> count;
@@ -212,6 +210,5 @@ TriangleMesh object_surface(const SceneObject& object, double time,
   for (Eigen::Vector3d& v : mesh.vertices) v = frame.to_world(v);
   return mesh;
 }
-
 
 }  // namespace knit

@@ -49,5 +49,4 @@ TriangleMesh surface_mesh(const Shape& shape, const Eigen::AlignedBox3d& region,
 TriangleMesh object_surface(const SceneObject& object, double time,
                             const Eigen::AlignedBox3d& world_region, double voxel = 0);
 
-
 }  // namespace knit

@@ -381,7 +381,9 @@ Params parse_params(const JsonReader& r, Params p) {
         if (it == names.end()) {
           std::string expected;
           for (size_t k = 0; k < names.size(); ++k)
-            expected += (k == 0 ? "" : k + 1 == names.size() ? " or " : ", ") +
+            expected += (k == 0                  ? ""
+                         : k + 1 == names.size() ? " or "
+                                                 : ", ") +
                         ("\"" + names[k] + "\"");
           v.fail("expected " + expected + ", got \"" + name + "\"");
         }

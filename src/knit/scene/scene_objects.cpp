@@ -1,5 +1,5 @@
-#include "knit/io/obj.hpp"
 #include "knit/scene/scene_objects.hpp"
+#include "knit/io/obj.hpp"
 
 #include <cmath>
 #include <filesystem>
