@@ -1,15 +1,18 @@
-// knitsim graph PROGRAM.k [--loops] [--out FILE.json]: runs a knitout program on the
-// machine model (src/knit/graph/knitout_machine.hpp) and prints its knit graph's summary as
-// JSON: the loops by kind, face and bed, the yarns (carrier, in and out lines, loops,
+// knitsim graph PROGRAM.k|CHART.chart [--loops] [--out FILE.json]: runs a knitout program
+// on the machine model (src/knit/graph/knitout_machine.hpp), or reads a hand-knitting chart
+// (src/knit/graph/chart.hpp), and prints its knit graph's summary as JSON: the loops by kind, face and bed, the yarns (carrier, in and out lines, loops,
 // misses, courses), passes, free loops (live at the end, or dropped: ladders, each with
 // the line that made it and the one that dropped it), crossings, the checks' problems and
 // the interpreter's notes; with --loops every loop too. docs/knit-graph.md describes it.
+#include <cctype>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
 
 #include "commands.hpp"
 #include "common.hpp"
+#include "knit/graph/chart.hpp"
 #include "knit/graph/knitout_machine.hpp"
 #include "knit/io/state_file.hpp"
 #include "knit/util/atomic_file.hpp"
@@ -39,15 +42,9 @@ nlohmann::ordered_json loop_json(const kg::KnitGraph& g, kg::LoopId id) {
   return j;
 }
 
-nlohmann::ordered_json graph_json(const std::string& path, const kg::KnitoutResult& r, bool loops) {
-  const kg::KnitGraph& g = r.graph;
+// what the graph holds, after `j`'s lines about where it came from
+void add_graph_json(nlohmann::ordered_json& j, const kg::KnitGraph& g, bool loops) {
   const kg::GraphCheck check = g.check();
-  nlohmann::ordered_json j;
-  j["program"] = path;
-  j["knitout_version"] = r.version;
-  j["lines"] = r.lines;
-  j["instructions"] = r.instructions;
-  j["headers"] = r.headers;
   const auto kinds = g.count_by_kind();
   std::size_t purl = 0, back = 0;
   for (const kg::Loop& l : g.loops()) {
@@ -116,16 +113,48 @@ nlohmann::ordered_json graph_json(const std::string& path, const kg::KnitoutResu
   }
   j["stitch_settings"] = settings;
   j["problems"] = check.problems;
-  nlohmann::ordered_json notes = nlohmann::ordered_json::array();
-  for (const kg::KnitoutNote& n : r.notes)
-    notes.push_back({{"line", n.line}, {"count", n.count}, {"text", n.text}});
-  j["notes"] = notes;
   if (loops) {
     nlohmann::ordered_json all = nlohmann::ordered_json::array();
     for (kg::LoopId id = 0; id < g.num_loops(); ++id) all.push_back(loop_json(g, id));
     j["loop_list"] = all;
   }
+}
+
+nlohmann::ordered_json knitout_json(const std::string& path, const kg::KnitoutResult& r,
+                                    bool loops) {
+  nlohmann::ordered_json j;
+  j["program"] = path;
+  j["knitout_version"] = r.version;
+  j["lines"] = r.lines;
+  j["instructions"] = r.instructions;
+  j["headers"] = r.headers;
+  add_graph_json(j, r.graph, loops);
+  nlohmann::ordered_json notes = nlohmann::ordered_json::array();
+  for (const kg::KnitoutNote& n : r.notes)
+    notes.push_back({{"line", n.line}, {"count", n.count}, {"text", n.text}});
+  j["notes"] = notes;
   return j;
+}
+
+nlohmann::ordered_json chart_json(const std::string& path, const kg::ChartResult& r, bool loops) {
+  nlohmann::ordered_json j;
+  j["chart"] = path;
+  j["rows"] = r.rows;
+  j["columns"] = r.columns;
+  j["in_the_round"] = r.in_the_round;
+  j["stitches_per_row"] = r.stitches;  // [0]: cast on
+  j["symbols"] = r.symbols;
+  j["twisted"] = r.twisted.size();
+  j["short_rows"] = r.short_rows.size();
+  add_graph_json(j, r.graph, loops);
+  return j;
+}
+
+// a chart by its extension; anything else is read as knitout (.k, .knitout)
+bool is_chart(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext == ".chart";
 }
 
 }  // namespace
@@ -137,14 +166,20 @@ void register_graph(CLI::App& app) {
   };
   auto o = std::make_shared<Opts>();
   CLI::App* cmd = app.add_subcommand(
-      "graph", "run a knitout program on the machine model and print its knit graph as JSON");
-  add_required_path(cmd, "program", o->program, "knitout program (.k, .knitout)")
+      "graph",
+      "print the knit graph of a knitout program (run on the machine model) or a chart, as JSON");
+  add_required_path(cmd, "program", o->program,
+                    "knitout program (.k, .knitout) or hand-knitting chart (.chart, docs/charts.md)")
       ->check(existing_file());
   cmd->add_flag("--loops", o->loops, "list every loop (its needle, course, kind, face, parents)");
   add_out_option(cmd, o->out, "write the JSON to this file", "standard output");
   cmd->callback([o]() {
-    const kg::KnitoutResult r = kg::load_knitout_graph(o->program);
-    const std::string text = graph_json(o->program, r, o->loops).dump(2) + "\n";
+    const std::string text =
+        (is_chart(o->program) ? chart_json(o->program, kg::load_chart_graph(o->program), o->loops)
+                              : knitout_json(o->program, kg::load_knitout_graph(o->program),
+                                             o->loops))
+            .dump(2) +
+        "\n";
     if (o->out.empty())
       std::cout << text;
     else

@@ -56,5 +56,23 @@ TEST(GraphCommand, ARefusedProgramNamesItsLineAndExitsOne) {
   EXPECT_FALSE(std::filesystem::exists(json));  // nothing written
 }
 
+// a chart goes through the same command: a 4-stitch stockinette with one c4f row
+TEST(GraphCommand, PrintsTheGraphOfAChart) {
+  const std::string path = cli_test::temp_dir("graph_chart") + ".chart";
+  std::ofstream(path) << "k k k k\nc4f\nk k k k\n";
+  const cli_test::Result r = run("graph " + path + " --loops");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(r.output);
+  EXPECT_EQ(j["rows"], 3);
+  // 4 cast on and 4 a row, three rows; the last row's 4 stay live
+  EXPECT_EQ(j["loops"]["total"], 16);
+  EXPECT_EQ(j["loop_list"].size(), 16u);
+  EXPECT_EQ(j["free_loops"]["live"].size(), 4u);
+  EXPECT_TRUE(j["free_loops"]["dropped"].empty());
+  // the cable: each of its two front loops crosses each of its two back loops
+  EXPECT_EQ(j["crossings"].size(), 4u);
+  EXPECT_TRUE(j["problems"].empty());
+}
+
 }  // namespace
 }  // namespace knit
