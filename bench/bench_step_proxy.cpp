@@ -29,6 +29,7 @@
 #include <vector>
 
 #include "bench_util.hpp"
+#include "knit/solver/terms.hpp"
 #include "knit/contact/contact_samples.hpp"
 #include "knit/contact/contact_term.hpp"
 #include "knit/solver/simulator.hpp"

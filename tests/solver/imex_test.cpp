@@ -10,6 +10,7 @@
 #include <limits>
 
 #include "fd_check.hpp"
+#include "knit/solver/terms.hpp"
 #include "knit/constraints/groups.hpp"
 #include "knit/recipes/relax_knit.hpp"
 #include "knit/recipes/simulate_scene.hpp"

@@ -1,4 +1,5 @@
 #include "knit/solver/simulator.hpp"
+#include "knit/solver/terms.hpp"
 
 #include <tbb/parallel_for.h>
 
@@ -91,18 +92,6 @@ const char* status_word(StepStatus status) {
   return "unknown";
 }
 
-std::vector<std::unique_ptr<Term>> default_terms(const Model& model) {
-  std::vector<std::unique_ptr<Term>> terms;
-  terms.push_back(std::make_unique<Gravity>());
-  terms.push_back(std::make_unique<BendingEnergy>(model.params.solver.implicit_bending));
-  terms.push_back(std::make_unique<LengthEnergy>());
-  if (model.params.material.k_global > 0) terms.push_back(std::make_unique<GlobalDamping>());
-  if (model.params.material.contact) terms.push_back(std::make_unique<ContactTerm>(model));
-  if (std::any_of(model.objects.begin(), model.objects.end(),
-                  [](const auto& o) { return o->penalty; }))
-    terms.push_back(std::make_unique<ObjectPenalty>(model));
-  return terms;
-}
 
 Simulator::Simulator(Model model) : Simulator(model, default_terms(model)) {}
 

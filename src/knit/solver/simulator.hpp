@@ -51,9 +51,9 @@ const char* status_word(StepStatus status);
 
 class Simulator {
  public:
-  /// Builds the default terms for the model's parameters: gravity, bending, length,
-  /// global damping (when k_global > 0), yarn–yarn contact (when material.contact) and
-  /// the object penalty (when an object has `penalty` on).
+  /// Builds the default terms for the model's parameters (default_terms, solver/terms.hpp):
+  /// gravity, bending, length, global damping (when k_global > 0), yarn–yarn contact (when
+  /// material.contact) and the object penalty (when an object has `penalty` on).
   explicit Simulator(Model model);
   /// A simulator with exactly the given terms (for tests and special set-ups).
   Simulator(Model model, std::vector<std::unique_ptr<Term>> terms);
@@ -243,7 +243,5 @@ class Simulator {
   Eigen::VectorXd m_cg_r, m_cg_z, m_cg_p, m_cg_ap, m_cg_kp, m_cg_kx;
 };
 
-/// The default terms for a model's parameters (see Simulator(Model)).
-std::vector<std::unique_ptr<Term>> default_terms(const Model& model);
 
 }  // namespace knit
