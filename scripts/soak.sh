@@ -23,7 +23,7 @@ soak() {  # name, then the command's arguments (without --out)
   local out="$work/$name-cut" interrupts=0 rc cmd
   local signals=(INT TERM)
   set +e
-  "$knitsim" "$@" --quiet --out "$out" >/dev/null 2>&1 &
+  "$knitsim" "$@" --quiet --out "$out" >/dev/null 2>"$work/$name-leg.err" &
   local pid=$!
   while true; do
     sleep "$period"
@@ -33,7 +33,8 @@ soak() {  # name, then the command's arguments (without --out)
     rc=$?
     if [ "$rc" -eq 0 ]; then break; fi
     if [ "$rc" -ne 130 ] && [ "$rc" -ne 143 ]; then
-      echo "soak: $name exited with $rc after $interrupts interruptions" >&2
+      echo "soak: $name exited with $rc after $interrupts interruptions; it said:" >&2
+      sed 's/^/  /' "$work/$name-leg.err" >&2
       exit 1
     fi
     interrupts=$((interrupts + 1))
@@ -46,7 +47,7 @@ soak() {  # name, then the command's arguments (without --out)
     cmd=$(/usr/bin/python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["resume_command"])' "$out/summary.json")
     # the command as the summary gives it, with this build's knitsim (exec: the signal
     # must reach knitsim, not a shell that leaves it running)
-    eval "exec \"$knitsim\" ${cmd#knitsim }" >/dev/null 2>&1 &
+    eval "exec \"$knitsim\" ${cmd#knitsim }" >/dev/null 2>"$work/$name-leg.err" &
     pid=$!
   done
   set -e

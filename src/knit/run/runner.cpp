@@ -132,7 +132,10 @@ namespace {
 // drops the rows of an existing log.csv whose time is after `time` (a run resumed from an
 // earlier state of the same directory goes on from there), and the row at `time` unless
 // `keep_at_time` (the state is at an output step: an older knitsim also wrote a row at an
-// interrupt between two, which the uninterrupted run does not have)
+// interrupt between two, which the uninterrupted run does not have). A row's time is
+// written with 10 significant digits: "at `time`" is within LOG_TIME_TOLERANCE of it, far
+// less than a step apart (rows are a step apart at least: 1e-9 of the time is a step only
+// after a billion steps)
 // (returns false, touching nothing, when its header is not `expected`: an older version
 // wrote other columns)
 bool truncate_log_after(const std::filesystem::path& path, double time, bool keep_at_time,
@@ -145,7 +148,9 @@ bool truncate_log_after(const std::filesystem::path& path, double time, bool kee
     if (header && line != expected) return false;
     if (!header) {
       const double t = std::strtod(line.c_str(), nullptr);
-      if (keep_at_time ? t > time * (1 + 1e-12) + 1e-15 : t >= time * (1 - 1e-12) - 1e-15) break;
+      constexpr double LOG_TIME_TOLERANCE = 1e-9;  // relative; the rows' 10 digits round by 5e-10
+      const double tol = LOG_TIME_TOLERANCE * std::abs(time) + 1e-15;
+      if (keep_at_time ? t > time + tol : t >= time - tol) break;
     }
     header = false;
     kept += line + "\n";
@@ -549,7 +554,9 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
           signal == 0 && seconds_since(last_checkpoint) >= opt.checkpoint_every_s)
         write_checkpoint();
     }
-    if (signal != 0) {
+    // a signal during the last step comes when the run is done: it ends as asked (an
+    // interrupted run would leave a resume command with no time left to run)
+    if (signal != 0 && !last) {
       report.status = StepStatus::INTERRUPTED;
       report.message = std::string("interrupted by ") + interrupt_signal_name(signal) +
                        " at t = " + short_number(state.time) + " s";

@@ -95,7 +95,8 @@ struct RunReport {
 /// INTERRUPTED: the state is in DIR/final.kstate and the summary holds the command to
 /// resume. An interrupt between two output steps writes no log row or frame (the state is
 /// in final.kstate) and does not ask stop_when, so that the resumed run goes on as the
-/// uninterrupted one.
+/// uninterrupted one. A signal that comes during the run's last step leaves it finished
+/// (status OK): nothing would be left to resume.
 RunReport run_simulation(Simulator& sim, State& state, const RunOptions& options);
 
 /// Evaluates the forces at `state` and throws std::invalid_argument when yarns start
