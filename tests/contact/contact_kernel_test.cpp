@@ -182,7 +182,8 @@ TEST(ContactKernel, DampingForceMatchesFiniteDifferences) {
   contact_pair_damping_force(xi, xj, vi, vj, 0.3, 0.35, p, quad10(), fi, fj);
   ASSERT_GT(fi.norm(), 0);
   // force = −∂D/∂v: compare −force with the differences of D
-  auto damping = [&](const Vector12d& a, const Vector12d& b) {
+  // (the positions captured by name: clang before 16 refuses a structured binding in a lambda)
+  auto damping = [&, &xi = xi, &xj = xj](const Vector12d& a, const Vector12d& b) {
     return contact_pair_damping(xi, xj, a, b, 0.3, 0.35, p, quad10());
   };
   expect_gradient_matches(damping, vi, vj, -fi, -fj, 1e-4, 1e-7, 0.0, "damping");

@@ -437,7 +437,10 @@ SheetFit fit_sheet_material(const std::string& kstate_path, const std::vector<st
   // bias: bisection on log k_shear (the bias stiffness grows with it)
   if (targets.count("bias")) {
     const Target& t = targets["bias"];
-    const auto [g, ks] = setup("bias", t);
+    // (not a structured binding: the lambda below uses both, which clang before 16 refuses)
+    const std::pair<StretchGeometry, KnitSheet> setup_bias = setup("bias", t);
+    const StretchGeometry& g = setup_bias.first;
+    const KnitSheet& ks = setup_bias.second;
     sheet::SheetMaterial m = fit.material;
     auto stiffness = [&](double ks_) {
       m.k_shear = ks_;
