@@ -17,10 +17,10 @@
 #include <regex>
 
 #include "bench_util.hpp"
-#include "knit/solver/terms.hpp"
 #include "knit/filters/nonrigid_damping.hpp"
 #include "knit/recipes/relax_knit.hpp"
 #include "knit/solver/simulator.hpp"
+#include "knit/solver/terms.hpp"
 
 namespace {
 

@@ -29,10 +29,10 @@
 #include <vector>
 
 #include "bench_util.hpp"
-#include "knit/solver/terms.hpp"
 #include "knit/contact/contact_samples.hpp"
 #include "knit/contact/contact_term.hpp"
 #include "knit/solver/simulator.hpp"
+#include "knit/solver/terms.hpp"
 
 // every heap allocation of this program is counted, to report allocations per step
 // (GCC 12 warns falsely that free() does not match these operator new replacements)

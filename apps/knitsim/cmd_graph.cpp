@@ -1,9 +1,10 @@
 // knitsim graph PROGRAM.k|CHART.chart [--loops] [--out FILE.json]: runs a knitout program
 // on the machine model (src/knit/graph/knitout_machine.hpp), or reads a hand-knitting chart
-// (src/knit/graph/chart.hpp), and prints its knit graph's summary as JSON: the loops by kind, face and bed, the yarns (carrier, in and out lines, loops,
-// misses, courses), passes, free loops (live at the end, or dropped: ladders, each with
-// the line that made it and the one that dropped it), crossings, the checks' problems and
-// the interpreter's notes; with --loops every loop too. docs/knit-graph.md describes it.
+// (src/knit/graph/chart.hpp), and prints its knit graph's summary as JSON: the loops by kind, face
+// and bed, the yarns (carrier, in and out lines, loops, misses, courses), passes, free loops (live
+// at the end, or dropped: ladders, each with the line that made it and the one that dropped it),
+// crossings, the checks' problems and the interpreter's notes; with --loops every loop too.
+// docs/knit-graph.md describes it.
 #include <cctype>
 #include <filesystem>
 #include <iostream>
@@ -168,16 +169,17 @@ void register_graph(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "graph",
       "print the knit graph of a knitout program (run on the machine model) or a chart, as JSON");
-  add_required_path(cmd, "program", o->program,
-                    "knitout program (.k, .knitout) or hand-knitting chart (.chart, docs/charts.md)")
+  add_required_path(
+      cmd, "program", o->program,
+      "knitout program (.k, .knitout) or hand-knitting chart (.chart, docs/charts.md)")
       ->check(existing_file());
   cmd->add_flag("--loops", o->loops, "list every loop (its needle, course, kind, face, parents)");
   add_out_option(cmd, o->out, "write the JSON to this file", "standard output");
   cmd->callback([o]() {
     const std::string text =
-        (is_chart(o->program) ? chart_json(o->program, kg::load_chart_graph(o->program), o->loops)
-                              : knitout_json(o->program, kg::load_knitout_graph(o->program),
-                                             o->loops))
+        (is_chart(o->program)
+             ? chart_json(o->program, kg::load_chart_graph(o->program), o->loops)
+             : knitout_json(o->program, kg::load_knitout_graph(o->program), o->loops))
             .dump(2) +
         "\n";
     if (o->out.empty())

@@ -10,13 +10,13 @@
 #include <limits>
 
 #include "fd_check.hpp"
-#include "knit/solver/terms.hpp"
 #include "knit/constraints/groups.hpp"
 #include "knit/recipes/relax_knit.hpp"
 #include "knit/recipes/simulate_scene.hpp"
 #include "knit/scene/scene.hpp"
 #include "knit/solver/simulator.hpp"
 #include "knit/solver/stiff_solve.hpp"
+#include "knit/solver/terms.hpp"
 #include "yarn_setups.hpp"
 
 namespace knit {

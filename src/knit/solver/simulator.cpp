@@ -92,7 +92,6 @@ const char* status_word(StepStatus status) {
   return "unknown";
 }
 
-
 Simulator::Simulator(Model model) : Simulator(model, default_terms(model)) {}
 
 Simulator::Simulator(Model model, std::vector<std::unique_ptr<Term>> terms)

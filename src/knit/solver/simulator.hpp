@@ -243,5 +243,4 @@ class Simulator {
   Eigen::VectorXd m_cg_r, m_cg_z, m_cg_p, m_cg_ap, m_cg_kp, m_cg_kx;
 };
 
-
 }  // namespace knit
