@@ -131,6 +131,7 @@ void register_relax(CLI::App& app) {
              "goes on from there); 0: none",
              "s (wall clock)", closed(0, 1e9));
   add_quiet_flag(cmd, o->quiet);
+  add_check_crossings_flag(cmd, o->run.check_crossings);
   add_export_option(cmd, o->export_format);
   cmd->callback([o, cmd]() {
     auto given = [&](const char* name) { return cmd->count(name) > 0; };

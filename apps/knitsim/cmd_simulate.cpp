@@ -16,7 +16,7 @@ void register_simulate(CLI::App& app) {
     std::string scene, out, resume, knit;
     int threads = 0;
     double duration = 0;
-    bool quiet = false, overwrite = false, implicit_bending = false;
+    bool quiet = false, overwrite = false, implicit_bending = false, check_crossings = false;
     std::string export_format, integrator;
     double time_step = 0, contact_solve_tolerance = 0, contact_reuse = 0;
     int output_every = 0, max_step_halvings = 0;
@@ -54,6 +54,7 @@ void register_simulate(CLI::App& app) {
               "override the scene's steps between written states and log rows", 1, 1'000'000'000,
               "steps", "the scene's");
   add_quiet_flag(cmd, opts->quiet);
+  add_check_crossings_flag(cmd, opts->check_crossings);
   add_export_option(cmd, opts->export_format);
   cmd->callback([opts, cmd]() {
     // everything is validated before anything is written
@@ -100,6 +101,7 @@ void register_simulate(CLI::App& app) {
     run.out_dir = opts->out;
     run.overwrite = opts->overwrite;
     run.progress = !opts->quiet;
+    run.check_crossings = opts->check_crossings;
     run.extra["scene"] = std::filesystem::absolute(opts->scene).lexically_normal().string();
     if (!opts->knit.empty())
       run.extra["knit_state"] = std::filesystem::absolute(opts->knit).lexically_normal().string();

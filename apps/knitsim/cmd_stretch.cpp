@@ -139,6 +139,7 @@ void register_stretch(CLI::App& app) {
   cmd->add_flag("--no-render", o->no_render,
                 "no renders at strains 0, 0.25, 0.5, 1 and no movie of the frames");
   add_quiet_flag(cmd, o->quiet);
+  add_check_crossings_flag(cmd, o->stretch.check_crossings);
   cmd->callback([o, cmd]() {
     if (!o->plot.empty()) {
       if (o->inputs.empty())
@@ -214,6 +215,7 @@ void register_stretch(CLI::App& app) {
       // knit and relax the pattern in memory; its relaxed state goes beside the stretch run
       o->relax.run.max_time = o->relax_time;
       o->relax.run.progress = !o->quiet;
+      o->relax.run.check_crossings = o->stretch.check_crossings;
       if (!o->quiet) std::cerr << "relaxing " << o->inputs[0] << " first\n";
       const knit::RelaxResult r = knit::relax_knit(o->inputs[0], o->relax);
       char name[] = "/tmp/knitsim-stretch-XXXXXX";

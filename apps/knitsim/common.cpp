@@ -97,6 +97,17 @@ void print_report(const knit::RunReport& report, const std::string& out_dir) {
   std::cout << "status " << s["status"].get<std::string>() << ": " << report.steps << " steps, "
             << quantity(s["sim_time_s"], "s") << " simulated in " << quantity(s["wall_time_s"], "s")
             << " wall (" << s["threads"].get<int>() << " threads); outputs in " << out_dir << "/\n";
+  if (s.contains("crossings")) {
+    const auto& c = s["crossings"];
+    std::cout << "crossing check: " << c["steps_checked"] << " steps checked, " << c["count"]
+              << (c["count"] == 1 ? " crossing" : " crossings");
+    if (!c["first"].is_null())
+      std::cout << "; the first at t = " << quantity(c["first"]["time_s"], "s") << ", segments "
+                << c["first"]["segments"][0] << " and " << c["first"]["segments"][1]
+                << " (yarns " << c["first"]["yarns"][0] << " and " << c["first"]["yarns"][1]
+                << ")";
+    std::cout << "\n";
+  }
   if (report.status == knit::StepStatus::INTERRUPTED) {
     std::cerr << "knitsim: " << report.message << "; the state is in " << out_dir
               << "/final.kstate\n";

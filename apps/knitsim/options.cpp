@@ -240,6 +240,13 @@ void add_quiet_flag(CLI::App* cmd, bool& quiet) {
   cmd->add_flag("--quiet,-q", quiet, "no progress line");
 }
 
+void add_check_crossings_flag(CLI::App* cmd, bool& check) {
+  cmd->add_flag("--check-crossings", check,
+                "check every step for yarns that passed through each other (a continuous test "
+                "between the states before and after it); the summary's \"crossings\" gives "
+                "their count (0 expected) and the first");
+}
+
 void add_threads_option(CLI::App* cmd, int& threads) {
   add_integer(cmd, "--threads,-j", threads, "worker threads", 0, 4096, "count",
               std::to_string(threads) + (threads == 0 ? " (all cores)" : ""));

@@ -93,6 +93,9 @@ CLI::Option* add_out_option(CLI::App* cmd, std::string& out, const std::string& 
 void add_overwrite_flag(CLI::App* cmd, bool& overwrite, const std::string& doc = "");
 /// --quiet,-q: no progress line.
 void add_quiet_flag(CLI::App* cmd, bool& quiet);
+/// --check-crossings: check every step for yarns passing through each other
+/// (knit::RunOptions::check_crossings).
+void add_check_crossings_flag(CLI::App* cmd, bool& check);
 /// --threads,-j N (0 = all cores).
 void add_threads_option(CLI::App* cmd, int& threads);
 /// --export usd|obj|bcc|ply|… (knit::export_formats()).

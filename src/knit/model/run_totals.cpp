@@ -39,6 +39,7 @@ void each_field(Totals& t, Field&& f) {
   f("halving_calm", t.halving.calm);
   f("warnings", t.warnings);
   f("objects", t.objects);
+  f("crossings", t.crossings);
 }
 
 // (an extreme not reached yet is +infinity, which JSON writes as null)
@@ -61,6 +62,13 @@ struct Writer {
     for (const auto& [name, o] : m)
       j[key][name] = {{"deepest_penetration_cm", number(o.deepest_penetration)},
                       {"contact_points_sum", number(o.contact_points_sum)}};
+  }
+  void operator()(const char* key, const CrossingTotals& c) {
+    j[key] = {{"steps_checked", c.steps_checked},
+              {"count", c.count},
+              {"first_time_s", number(c.first_time)},
+              {"first_segments", {c.first_segment_a, c.first_segment_b}},
+              {"first_point_cm", {c.first_x, c.first_y, c.first_z}}};
   }
 };
 
@@ -126,6 +134,38 @@ struct Reader {
         *target = read_double(value.at(field), where + "." + field, false);
       }
     }
+  }
+  void operator()(const char* key, CrossingTotals& c) {
+    // states written before runs checked crossings have none: nothing was checked
+    if (!j.contains(key)) {
+      c = CrossingTotals{};
+      return;
+    }
+    const nlohmann::json& o = j.at(key);
+    const std::string where(key);
+    if (!o.is_object()) fail(where, "not an object");
+    auto field = [&](const char* name) -> const nlohmann::json& {
+      if (!o.contains(name)) fail(where + "." + name, "missing");
+      return o.at(name);
+    };
+    const long long big = std::numeric_limits<long long>::max();
+    c.steps_checked = read_count(field("steps_checked"), where + ".steps_checked", big);
+    c.count = read_count(field("count"), where + ".count", big);
+    c.first_time = read_double(field("first_time_s"), where + ".first_time_s", true);
+    const nlohmann::json& seg = field("first_segments");
+    const nlohmann::json& pt = field("first_point_cm");
+    if (!seg.is_array() || seg.size() != 2) fail(where + ".first_segments", "not a pair");
+    if (!pt.is_array() || pt.size() != 3) fail(where + ".first_point_cm", "not 3 numbers");
+    for (int k = 0; k < 2; ++k) {
+      const std::string at = where + ".first_segments[" + std::to_string(k) + "]";
+      if (!seg[k].is_number_integer()) fail(at, "not an integer");
+      const long long s = seg[k].get<long long>();
+      if (s < -1 || s > std::numeric_limits<int>::max()) fail(at, "out of range");
+      (k == 0 ? c.first_segment_a : c.first_segment_b) = static_cast<int>(s);
+    }
+    double* xyz[3] = {&c.first_x, &c.first_y, &c.first_z};
+    for (int k = 0; k < 3; ++k)
+      *xyz[k] = read_double(pt[k], where + ".first_point_cm[" + std::to_string(k) + "]", false);
   }
 };
 

@@ -27,6 +27,16 @@ struct HalvingCounts {
   int calm = 0;            ///< steps of h passed at `level` without a failure
 };
 
+/// What the crossing check (contact/crossings.hpp) found over a run that asked for it.
+struct CrossingTotals {
+  long long steps_checked = 0;
+  long long count = 0;  ///< pairs of segments that passed through each other, over the steps
+  /// the first one: when (s; +infinity, null in JSON, before any), its segments and where
+  double first_time = std::numeric_limits<double>::infinity();
+  int first_segment_a = -1, first_segment_b = -1;
+  double first_x = 0, first_y = 0, first_z = 0;  ///< cm
+};
+
 struct RunTotals {
   double start_time = 0;  ///< s: the time of the run's first state
   /// s: the time the run is to end at. A resumed run asked to end there to within a
@@ -58,6 +68,8 @@ struct RunTotals {
     double contact_points_sum = 0;   ///< its points in contact, summed over the steps
   };
   std::map<std::string, Object> objects;  ///< by object name
+  /// (absent from the run blocks of states written before runs could check crossings)
+  CrossingTotals crossings;
 };
 
 /// The run block of a state file: every field of `t` by name.

@@ -40,6 +40,7 @@ RunOptions scene_run_options(const Scene& scene, const SimulateOptions& o) {
   run.out_dir = o.out_dir;
   run.progress = o.progress;
   run.write_frames = o.write_frames;
+  run.check_crossings = o.check_crossings;
   run.extra = o.extra;
   return run;
 }

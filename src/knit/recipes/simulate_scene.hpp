@@ -26,6 +26,7 @@ struct SimulateOptions {
   bool overwrite = false;  ///< empty a directory that holds another run's files first
   bool progress = true;    ///< progress line on stderr
   bool write_frames = true;
+  bool check_crossings = false;  ///< RunOptions::check_crossings
   /// The scene's state was resumed from a state of the run in out_dir: go on there (see
   /// RunOptions::continue_in_place) instead of requiring an empty directory.
   bool continue_in_place = false;

@@ -596,6 +596,7 @@ StretchResult stretch_knit(const std::string& kstate_path, const StretchOptions&
   so.out_dir = o.out_dir;
   so.progress = o.progress;
   so.write_frames = o.write_frames;
+  so.check_crossings = o.check_crossings;
   so.continue_in_place = !resumed_from.empty();
   so.resumed_totals = resumed_totals;
   so.resume_command = o.resume_command;

@@ -77,6 +77,7 @@ struct StretchOptions {
   std::string resume_command;  ///< written into the summary of an interrupted run
   bool progress = true;
   bool write_frames = true;
+  bool check_crossings = false;  ///< RunOptions::check_crossings (the pull's run)
   /// with out_dir and frames: renders of the sample at strains 0, 0.25, 0.5 and 1 (those up
   /// to to_strain, and to_strain itself) side by side in stretch_renders.png (each also as
   /// `renders/strain_<e>.png`), and a movie of every frame in movie/animation.mp4

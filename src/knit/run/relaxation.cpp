@@ -52,6 +52,7 @@ RunReport relax(Simulator& sim, State& state, const RelaxOptions& o, nlohmann::j
   run.resumed_totals = o.resumed_totals;
   run.resume_command = o.resume_command;
   run.halving_calm_steps = o.halving_calm_steps;
+  run.check_crossings = o.check_crossings;
   const bool residual_test = o.force_residual > 0;
   // every check measures the force residual (a force evaluation and two projections per
   // check_every steps), so that the log shows how far from rest a run is by both tests

@@ -19,6 +19,7 @@
 #include <map>
 #include <sstream>
 
+#include "knit/contact/crossings.hpp"
 #include "knit/io/state_file.hpp"
 #include "knit/run/interrupt.hpp"
 #include "knit/run/step_halving.hpp"
@@ -530,10 +531,30 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
     ~LeanRecords() { sim.set_lean_records(was); }
   } lean{sim, sim.lean_records()};
   sim.set_lean_records(true);
+  Eigen::VectorXd q_before;
+  auto check_crossings = [&](double t_before) {
+    const std::vector<SegmentCrossing> found = find_crossings(model, q_before, state.q);
+    CrossingTotals& c = totals.crossings;
+    ++c.steps_checked;
+    c.count += static_cast<long long>(found.size());
+    for (const SegmentCrossing& x : found) {
+      const double t = t_before + x.step_fraction * (state.time - t_before);
+      if (t >= c.first_time) continue;
+      c.first_time = t;
+      c.first_segment_a = x.segment_a;
+      c.first_segment_b = x.segment_b;
+      c.first_x = x.point.x();
+      c.first_y = x.point.y();
+      c.first_z = x.point.z();
+    }
+  };
   while (report.status == StepStatus::OK) {
     const double hs = next_step_length(state.time, end_time, h);
     if (hs == 0) break;
+    if (opt.check_crossings) q_before = state.q;
+    const double t_before = state.time;
     const StepResult res = stepper.step(sim, state, hs);
+    if (res.ok() && opt.check_crossings) check_crossings(t_before);
     if (!res.ok()) {
       report.status = res.status;
       report.message = res.message;
@@ -689,6 +710,16 @@ RunReport run_simulation(Simulator& sim, State& state, const RunOptions& opt) {
     nlohmann::json w = nlohmann::json::object();
     for (const auto& [text, count] : totals.warnings) w[text] = count;
     s["warnings"] = w;  // steps with each warning
+  }
+  if (opt.check_crossings) {
+    const CrossingTotals& c = totals.crossings;
+    nlohmann::json first = nullptr;
+    if (c.count > 0)
+      first = {{"time_s", c.first_time},
+               {"segments", {c.first_segment_a, c.first_segment_b}},
+               {"yarns", {model.seg_yarn[c.first_segment_a], model.seg_yarn[c.first_segment_b]}},
+               {"point_cm", {c.first_x, c.first_y, c.first_z}}};
+    s["crossings"] = {{"steps_checked", c.steps_checked}, {"count", c.count}, {"first", first}};
   }
   s["frames_written"] = totals.frames_written;
   s["params"] = params_json(model.params);

@@ -64,6 +64,11 @@ struct RunOptions {
   /// With SolverSettings::max_step_halvings: steps that pass at a halved step before it
   /// doubles again (HalvingStepper); 0 (the default) keeps the halved step to the end.
   int halving_calm_steps = 0;
+  /// Check every step for yarns that passed through each other (contact/crossings.hpp,
+  /// between the state before the step and after it): the summary's `crossings` says how
+  /// many steps were checked, how many pairs of segments crossed (0 expected) and the
+  /// first (time, segments, yarns, point). Costs about as much as a contact evaluation.
+  bool check_crossings = false;
   /// Optional measurement at every output step, before the log row and the state are
   /// written, that StepData should carry into them (relaxations: the force residual).
   std::function<void(Simulator&, const State&)> before_output;
