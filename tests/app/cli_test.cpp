@@ -769,12 +769,13 @@ TEST(Cli, RelaxesAKnitoutProgramAtItsSizeAndRefusesWhatItCannotKnit) {
   EXPECT_NE(size.output.find("the program knits 4 rows × 4 columns flat"), std::string::npos)
       << size.output;
   EXPECT_FALSE(fs::exists(out2));
-  // a transfer
+  // a decrease (two loops moved onto one needle and knit together)
   const std::string prog = ::testing::TempDir() + "/cli_xfer.k";
-  std::ofstream(prog) << ";!knitout-2\nin 3\nknit + f1 3\nknit + f2 3\nxfer f2 b2\n";
+  std::ofstream(prog) << ";!knitout-2\nin 3\nknit + f1 3\nknit + f2 3\nxfer f2 b2\nrack -1\n"
+                         "xfer b2 f1\nrack 0\nknit - f1 3\n";
   const Result xfer = run("relax " + prog + " --out " + out2);
   EXPECT_EQ(xfer.code, 1);
-  EXPECT_NE(xfer.output.find("cli_xfer.k:5: 'xfer f2 b2': transfers"), std::string::npos)
+  EXPECT_NE(xfer.output.find("cli_xfer.k:9: 'knit - f1 3': a decrease (2 loops"), std::string::npos)
       << xfer.output;
   EXPECT_FALSE(fs::exists(out2));
 }

@@ -1,11 +1,17 @@
-// Knitout programs read into the chart and size the generator knits, and everything the
-// generator cannot knit refused with the line and instruction.
+// Knitout programs read through the knit graph (the machine model, src/knit/graph) into the
+// chart and size the generator knits, and everything the generator cannot lay refused with
+// the line and instruction.
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <fstream>
+#include <set>
 #include <iterator>
 #include <string>
 
+#include "knit/contact/crossings.hpp"
+#include "knit/graph/knitout_machine.hpp"
+#include "knit/pattern/generator.hpp"
 #include "knit/pattern/knitout.hpp"
 #include "knit/recipes/relax_knit.hpp"
 
@@ -78,6 +84,26 @@ TEST(Knitout, BackBedStitchesArePurlsSeenFromTheFront) {
   EXPECT_EQ(rows_of(p), "kpkp/kpkp/kpkp");
 }
 
+TEST(Knitout, PurlsMadeByTransfersReadAsPurls) {
+  // a machine purls a stitch by moving its loop to the back bed, knitting it there and
+  // moving it back: the same fabric as the back-bed stitches of flat(), seen from the front
+  std::string s = ";!knitout-2\nin 3\n";
+  for (int k = 1; k <= 4; ++k) s += "knit + f" + std::to_string(k) + " 3\n";
+  s += "xfer f2 b2\nxfer f4 b4\n";
+  s += "knit - b4 3\nknit - f3 3\nknit - b2 3\nknit - f1 3\n";
+  s += "xfer b2 f2\nxfer b4 f4\n";
+  for (int k = 1; k <= 4; ++k) s += "knit + f" + std::to_string(k) + " 3\n";
+  s += "out 3\n";
+  const KnitoutPiece p = parse_knitout(s, "xfer.k");
+  EXPECT_FALSE(p.in_the_round);
+  EXPECT_EQ(rows_of(p), "kkkk/kpkp/kkkk");
+  // racked transfers that bring each loop back to its own column change nothing
+  std::string r = ";!knitout-2\nin 3\nknit + f1 3\nknit + f2 3\nxfer f2 b2\nrack 1\n"
+                  "xfer b2 f3\nrack 0\nxfer f3 b3\nrack -1\nxfer b3 f2\nrack 0\n"
+                  "knit - f2 3\nknit - f1 3\n";
+  EXPECT_EQ(rows_of(parse_knitout(r, "racked.k")), "kk/kk");
+}
+
 TEST(Knitout, ATubeOnBothBedsIsKnitInTheRound) {
   std::string s = ";!knitout-2\nin 5\n";
   for (int r = 0; r < 3; ++r) {
@@ -100,32 +126,44 @@ TEST(Knitout, WhatCannotBeKnitYetIsRefusedWithItsLine) {
   };
   const std::vector<Case> cases = {
       {"knit + f1 3\n", "prog.k:1: not a knitout program"},
-      {head + "xfer f1 b1\n", "prog.k:5: 'xfer f1 b1': transfers"},
-      {head + "split + f1 b1 3\n", "prog.k:5: 'split + f1 b1 3': transfers"},
-      {head + "rack 1\n", "prog.k:5: 'rack 1': racking"},
+      // transfers and racking that leave one loop per column are read (a machine's purls)
+      {head + "xfer f1 b1\nknit - f2 3\nknit - b1 3\n", "(accepted)"},
+      {head + "xfer f1 b1\nknit - b1 3\nknit - f2 3\n",
+       "prog.k:6: 'knit - b1 3': row 1 starts at the edge where row 0 started"},
+      {head + "rack 1\n", "(accepted)"},
       {head + "rack 0\nknit - f2 3\nknit - f1 3\n", "(accepted)"},
-      {head + "knit - f2 4\n", "prog.k:5: 'knit - f2 4': a second carrier (4, after 3)"},
-      {head + "knit - f2 3 4\n", "several carriers"},
-      {head + "knit - f2\n", "no carrier given"},
-      {head + "tuck - f2 3\n", "prog.k:5: 'tuck - f2 3': tucks after the cast-on"},
-      {head + "drop f1\n", "prog.k:5: 'drop f1': 'drop' is not supported yet"},
-      {head + "knit - fs2 3\n", "sliders (fs2)"},
-      {head + "knit - x2 3\n", "expected a needle such as f12 or b3, got 'x2'"},
-      {head + "knit ^ f2 3\n", "expected 'knit +|- NEEDLE CARRIER'"},
-      {head + "frobnicate\n", "prog.k:5: 'frobnicate': unknown instruction 'frobnicate'"},
+      // a last row of loops dropped off the needles, as a program ends: its top edge
+      {head + "drop f1\ndrop f2\n", "(accepted)"},
+      // what needs the knit graph's own layout
+      {head + "split + f1 b1 3\n", "prog.k:5: 'split + f1 b1 3': a split"},
+      {head + "in 4\nknit - f2 4\n", "prog.k:5: 'in 4': a second yarn (carriers 3, 4)"},
+      {head + "tuck - f2 3\n", "prog.k:5: 'tuck - f2 3': a tuck beside the loops"},
+      {head + "xfer f2 b2\nrack -1\nxfer b2 f1\nrack 0\nknit - f1 3\n",
+       "prog.k:9: 'knit - f1 3': a decrease (2 loops pulled through at once)"},
+      {head + "xfer f2 b2\nrack -1\nxfer b2 f1\nrack 0\nknit - f2 3\nknit - f1 3\n",
+       "prog.k:9: 'knit - f2 3': a new column (a loop on an empty needle) after the first row"},
+      // what the machine refuses (the interpreter, src/knit/graph/knitout_machine.hpp)
+      {head + "knit - f2 4\n", "prog.k:5: 'knit - f2 4': carrier 4 is not in"},
+      {head + "knit - f2\n", "(accepted)"},  // a knit with no carrier drops (knitout-2)
+      {head + "knit - fs2 3\n", "sliders"},
+      {head + "knit - x2 3\n", "expected a needle such as f12"},
+      {head + "knit ^ f2 3\n", "expected a direction"},
+      {head + "frobnicate\n", "prog.k:5: 'frobnicate': unknown"},
+      // pieces that are not rectangles
       {head + "knit - f2 3\n",
-       "prog.k:5: 'knit - f2 3': the last row has 1 of the piece's 2 stitches"},
-      {head + "knit - f2 3\nknit - f2 3\n", "prog.k:6: 'knit - f2 3': row 1 does not go over"},
-      {";!knitout-2\nin 3\n", "prog.k:2: the program knits no stitches"},
-      {";!knitout-2\nknit + f1 3\nknit + f2 3\nknit - b1 3\n",
-       "a tube needs its needles on both beds"},
+       "prog.k:5: 'knit - f2 3': row 1 has 1 of the piece's 2 stitches"},
+      {head + "knit - f2 3\nknit - f2 3\n", "prog.k:5: 'knit - f2 3': row 1 has 1 of"},
+      {";!knitout-2\nin 3\n", "prog.k: the program knits no stitches"},
+      // a first pass on the front bed and a second on the back: a tube of three columns
+      {";!knitout-2\nin 3\nknit + f1 3\nknit + f2 3\nknit - b1 3\n", "(accepted)"},
   };
   for (const Case& c : cases) {
     const std::string got = refusal(c.program);
     EXPECT_NE(got.find(c.expect), std::string::npos) << c.program << "\n→ " << got;
   }
   // a mistyped needle (f-3 for f1, a column of its own) is named on its own line, not on
-  // the rows it shifts; a row that starts inside the piece is named at its start
+  // the rows it shifts; a row that starts inside the piece (f2 knit twice, f1 not at all)
+  // leaves a row short, named at its first stitch
   const std::string three = ";!knitout-2\nin 3\n";
   std::string typo = three, inside = three;
   for (int r = 0; r < 4; ++r)
@@ -135,15 +173,80 @@ TEST(Knitout, WhatCannotBeKnitYetIsRefusedWithItsLine) {
       typo += "knit " + dir + " f" + (r == 1 && k == 3 ? "-3" : std::to_string(needle)) + " 3\n";
       inside += "knit " + dir + " f" + std::to_string(r == 2 && k == 1 ? 2 : needle) + " 3\n";
     }
-  EXPECT_NE(refusal(typo).find("prog.k:8: 'knit - f-3 3': needle f-3 knits 1 stitch"),
+  EXPECT_NE(refusal(typo).find("prog.k:8: 'knit - f-3 3': a new column (a loop on an empty "
+                               "needle) after the first row"),
             std::string::npos)
       << refusal(typo);
-  EXPECT_NE(refusal(inside).find("prog.k:9: 'knit + f2 3': row 2 starts at needle f2, not at an "
-                                 "edge of the piece (f1 or f3)"),
+  EXPECT_NE(refusal(inside).find("prog.k:10: 'knit + f2 3': row 3 has 2 of the piece's 3 stitches"),
             std::string::npos)
       << refusal(inside);
   // machine settings do not change what is knitted
   EXPECT_EQ(refusal(head + "x-stitch-number 5\npause\nstitch 30 40\nmiss - f3 3\n"), "(accepted)");
+}
+
+// The textiles-lab programs (tests/data/knitout) whose graph is a rectangle of one yarn —
+// six of the 24 — read as sheets: every loop but the cast-on's a stitch of the chart, the
+// purls their transfers make where the program's name says; each is laid as yarn with the
+// yarns apart, and its first steps of relaxation pass no yarn through another. The others
+// are refused naming a line of the program (what they need is the graph's own layout).
+TEST(Knitout, TheTextilesLabProgramsOfOneYarnReadAsSheets) {
+  const std::string dir = std::string(KNIT_TEST_DATA) + "/knitout/";
+  const std::set<std::string> sheets = {"Tutorial1_helloworld.k", "Tutorial3_garter.k",
+                                        "Tutorial3_piqueribbing.k", "Tutorial3_wafflestitch.k",
+                                        "k.knitout", "rectangle.knitout"};
+  int refused = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    const std::string name = entry.path().filename().string();
+    if (name == "README.md") continue;
+    if (!sheets.count(name)) {
+      try {
+        load_knitout(entry.path().string());
+        ADD_FAILURE() << name << " was read as a sheet";
+      } catch (const std::invalid_argument& e) {
+        // SOURCE:LINE: 'INSTRUCTION': …
+        EXPECT_NE(std::string(e.what()).find(entry.path().string() + ":"), std::string::npos)
+            << e.what();
+        ++refused;
+      }
+      continue;
+    }
+    const KnitoutPiece p = load_knitout(entry.path().string());
+    // every loop of the graph is a stitch of the sheet, but the cast-on's (tucks on empty
+    // needles before the first stitch)
+    std::ifstream in(entry.path(), std::ios::binary);
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const graph::KnitoutResult run = graph::run_knitout(text, name);
+    size_t cast_on = 0;
+    for (const graph::Loop& l : run.graph.loops()) {
+      if (l.kind == graph::LoopKind::KNIT) break;
+      cast_on += l.tucked;
+    }
+    EXPECT_EQ(static_cast<size_t>(p.rows() * p.cols()), run.graph.num_loops() - cast_on) << name;
+    EXPECT_FALSE(p.in_the_round) << name;
+    for (int r = 0; r < p.rows(); ++r) {
+      const std::string& row = p.pattern.rows[r];
+      if (name == "Tutorial3_garter.k")  // every second row purled (by transfers)
+        EXPECT_EQ(row, std::string(p.cols(), r % 2 ? 'p' : 'k')) << name << " row " << r;
+      if (name == "Tutorial1_helloworld.k" || name == "rectangle.knitout")
+        EXPECT_EQ(row, std::string(p.cols(), 'k')) << name << " row " << r;
+    }
+    // laid as yarn: the smaller ones relaxed for 0.005 s too, every step checked
+    KnitOptions ko;
+    ko.rows = p.rows();
+    ko.cols = p.cols();
+    const GeneratedKnit g = generate_knit(p.pattern, ko);
+    EXPECT_GT(g.min_distance_ratio, 0.5) << name;
+    if (p.rows() * p.cols() > 500) continue;
+    RelaxKnitOptions o;
+    o.knit = ko;
+    o.run.max_time = 0.005;
+    o.run.progress = false;
+    o.run.check_crossings = true;
+    const RelaxResult rr = relax_knit(entry.path().string(), o);
+    ASSERT_EQ(rr.report.status, StepStatus::OK) << name << ": " << rr.report.message;
+    EXPECT_EQ(rr.report.summary.at("crossings").at("count").get<long long>(), 0) << name;
+  }
+  EXPECT_EQ(refused, 18);
 }
 
 TEST(Knitout, AProgramIsRelaxedAtItsOwnSize) {

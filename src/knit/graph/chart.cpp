@@ -452,6 +452,7 @@ LoopId Builder::make(int yarn, int row, int column, LoopKind kind, Face face, Di
   l.pass = row;
   l.course = row;
   l.kind = kind;
+  l.tucked = kind == LoopKind::TUCK;
   l.face = face;
   l.direction = d;
   l.line = row;

@@ -69,6 +69,9 @@ struct Loop {
   int pass = 0;    ///< the program's loop-making pass (see KnitGraph::passes)
   int course = 0;  ///< its yarn's pass: how many times the yarn turned before it
   LoopKind kind = LoopKind::KNIT;
+  /// made by a tuck (knitout's tuck, a chart's tuck): a NEW loop a tuck made is a cast-on's
+  /// or an increase's, one a knit made on an empty needle a stitch of its own
+  bool tucked = false;
   Face face = Face::KNIT;
   Direction direction = Direction::NONE;  ///< the carriage direction it was formed in
   int line = 0;                           ///< source line of the instruction that made it

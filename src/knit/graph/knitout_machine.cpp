@@ -288,6 +288,7 @@ void Machine::make_loops(std::string_view op, Direction d, NeedleRef n, LoopKind
     l.pass = pass;
     l.course = car.course;
     l.kind = kind;
+    l.tucked = op == "tuck";
     l.face = face;
     l.direction = d;
     l.line = m_line_no;
@@ -295,7 +296,6 @@ void Machine::make_loops(std::string_view op, Direction d, NeedleRef n, LoopKind
     made.push_back(g.add_loop(l, parents));
     m_home.push_back(is_front_side(n.bed) ? n.index : n.index + m_rack);
   }
-  (void)op;
 }
 
 void Machine::move_loops(NeedleRef from, NeedleRef to) {

@@ -1,14 +1,13 @@
 #include "knit/pattern/knitout.hpp"
 
 #include <algorithm>
-#include <charconv>
 #include <filesystem>
 #include <fstream>
 #include <map>
-#include <sstream>
 #include <stdexcept>
 #include <vector>
 
+#include "knit/graph/knitout_machine.hpp"
 #include "knit/util/input_file.hpp"
 
 namespace knit {
@@ -17,106 +16,224 @@ namespace {
 
 constexpr std::string_view KNITOUT_HEADER = ";!knitout-";
 
-struct Needle {
-  char bed = 'f';  ///< 'f' or 'b'
-  int index = 0;
-  bool operator<(const Needle& o) const { return bed != o.bed ? bed < o.bed : index < o.index; }
-};
+using graph::KnitGraph;
+using graph::Loop;
+using graph::LoopId;
 
-struct Stitch {
-  Needle needle;
-  bool purl = false;
-  int line = 0;
-  std::string instruction;  ///< as written (for messages)
-};
+// the text of line `n` (1-based) of `text`, trimmed
+std::string line_text(std::string_view text, int n) {
+  size_t begin = 0;
+  for (int k = 1; k < n && begin != std::string_view::npos; ++k) {
+    begin = text.find('\n', begin);
+    if (begin != std::string_view::npos) ++begin;
+  }
+  if (begin == std::string_view::npos || begin > text.size()) return "";
+  size_t end = text.find('\n', begin);
+  std::string_view line = text.substr(begin, end == std::string_view::npos ? end : end - begin);
+  while (!line.empty() && (line.back() == '\r' || line.back() == ' ' || line.back() == '\t'))
+    line.remove_suffix(1);
+  while (!line.empty() && (line.front() == ' ' || line.front() == '\t')) line.remove_prefix(1);
+  return std::string(line);
+}
 
-class Reader {
+// Reads the rectangular sheet the generator lays out of a program's knit graph (see
+// knitout.hpp), or refuses naming the line.
+class SheetReader {
  public:
-  explicit Reader(const std::string& source) : m_source(source) {}
+  SheetReader(const KnitGraph& g, std::string_view text, const std::string& source)
+      : m_g(g), m_text(text), m_source(source) {}
 
-  [[noreturn]] void fail(int line, const std::string& instruction, const std::string& why) const {
-    std::ostringstream msg;
-    msg << m_source << ":" << line << ": ";
-    if (!instruction.empty()) msg << "'" << instruction << "': ";
-    msg << why;
-    throw std::invalid_argument(msg.str());
+  [[noreturn]] void fail(int line, const std::string& what) const {
+    if (line <= 0) throw std::invalid_argument(m_source + ": " + what);
+    throw std::invalid_argument(m_source + ":" + std::to_string(line) + ": '" +
+                                line_text(m_text, line) + "': " + what);
   }
 
-  Needle needle(int line, const std::string& instruction, const std::string& text) const {
-    if (text.size() >= 2 && (text[0] == 'f' || text[0] == 'b') && text[1] == 's')
-      fail(line, instruction, "sliders (" + text + ") are not supported yet");
-    Needle n;
-    if (text.empty() || (text[0] != 'f' && text[0] != 'b'))
-      fail(line, instruction, "expected a needle such as f12 or b3, got '" + text + "'");
-    n.bed = text[0];
-    const char* begin = text.data() + 1;
-    const char* end = text.data() + text.size();
-    const auto res = std::from_chars(begin, end, n.index);
-    if (res.ec != std::errc() || res.ptr != end || begin == end)
-      fail(line, instruction, "expected a needle such as f12 or b3, got '" + text + "'");
-    return n;
-  }
-
-  // the carriers of an instruction: exactly one, the same throughout
-  void carrier(int line, const std::string& instruction, const std::vector<std::string>& tokens,
-               size_t first) {
-    if (tokens.size() <= first)
-      fail(line, instruction,
-           "no carrier given (a stitch without yarn drops the loop: not "
-           "supported yet)");
-    if (tokens.size() > first + 1)
-      fail(line, instruction, "several carriers at once are not supported yet");
-    if (m_carrier.empty()) m_carrier = tokens[first];
-    if (tokens[first] != m_carrier)
-      fail(line, instruction,
-           "a second carrier (" + tokens[first] + ", after " + m_carrier +
-               ") is not supported yet: one yarn only");
-  }
-
-  std::string m_source;
-  std::string m_carrier;
-};
-
-std::string needle_name(const Needle& n) {
-  return std::string(1, n.bed) + std::to_string(n.index);
-}
-
-// A needle knitted far fewer times than most of the piece's columns (a typo such as f-3
-// for f47, a stray stitch) is named at its first stitch: the row walk would only find the
-// rows it shifts, long after it. Pieces of two columns are left to the row walk (which of
-// the two is the stray is not to be told).
-void check_stray_columns(const Reader& reader, const std::vector<Stitch>& stitches,
-                         const std::vector<Needle>& columns,
-                         const std::map<Needle, int>& column_of) {
-  if (columns.size() < 3) return;
-  std::vector<int> height(columns.size(), 0);
-  for (const Stitch& s : stitches) ++height[static_cast<size_t>(column_of.at(s.needle))];
-  // the height most columns have (a tie: the taller)
-  std::map<int, int> how_many;
-  for (int h : height) ++how_many[h];
-  int usual = 0, most = 0;
-  for (const auto& [h, n] : how_many)
-    if (n >= most) {
-      usual = h;
-      most = n;
+  KnitoutPiece read() {
+    const KnitGraph& g = m_g;
+    if (g.yarns().size() > 1) {
+      std::string names;
+      for (const auto& y : g.yarns()) names += (names.empty() ? "" : ", ") + y.carrier;
+      fail(g.yarns()[1].in_line,
+           "a second yarn (carriers " + names +
+               "): the generator lays one yarn; several carriers, waste yarn and stripes need "
+               "the knit graph's own layout, not built yet (`knitsim graph` reads the program)");
     }
-  for (const Stitch& s : stitches) {
-    const int h = height[static_cast<size_t>(column_of.at(s.needle))];
-    if (2 * h >= usual) continue;
-    reader.fail(s.line, s.instruction,
-                "needle " + needle_name(s.needle) + " knits " + std::to_string(h) +
-                    (h == 1 ? " stitch" : " stitches") + " in the whole program, and " +
-                    std::to_string(most) + " of the piece's " + std::to_string(columns.size()) +
-                    " columns knit " + std::to_string(usual) +
-                    ": every column is knitted in every row (a mistyped needle?); shaping and "
-                    "short rows are not supported yet");
+    // the cast-on: loops tucked onto empty needles before the first stitch
+    const size_t n = g.num_loops();
+    std::vector<int> row(n, -1), wale(n, -1);
+    std::vector<char> cast_on(n, 0);
+    bool stitched = false;
+    for (LoopId id = 0; id < n; ++id) {
+      const Loop& l = g.loop(id);
+      const auto parents = g.parents(id);
+      if (l.kind == graph::LoopKind::TUCK)
+        fail(l.line, "a tuck beside the loops a needle holds: tucks after the cast-on need the "
+                     "knit graph's own layout, not built yet");
+      if (l.kind == graph::LoopKind::SPLIT)
+        fail(l.line, "a split: transfers that knit need the knit graph's own layout, not built yet");
+      if (l.kind == graph::LoopKind::NEW && l.tucked && !stitched) {
+        cast_on[id] = 1;
+        continue;
+      }
+      stitched = true;
+      if (parents.size() > 1)
+        fail(l.line, "a decrease (" + std::to_string(parents.size()) +
+                         " loops pulled through at once): shaping needs the knit graph's own "
+                         "layout, not built yet");
+      if (parents.empty() || cast_on[parents[0]]) {
+        // a new column: only in the first row of stitches
+        if (m_first_pass < 0) m_first_pass = l.pass;
+        if (l.pass == m_first_pass) m_first_beds |= graph::is_front_side(l.bed) ? 1 : 2;
+        if (l.pass != m_first_pass && !m_round_second(l))
+          fail(l.line, std::string("a new column (a loop on ") +
+                           (parents.empty() ? "an empty needle" : "a cast-on loop") +
+                           ") after the first row: a column that starts a pass late, "
+                           "increases, yarn-overs and shaping need the knit graph's own layout, "
+                           "not built yet");
+        row[id] = 0;
+        wale[id] = static_cast<int>(m_wales.size());
+        m_wales.push_back(id);
+      } else {
+        const LoopId p = parents[0];
+        row[id] = row[p] + 1;
+        wale[id] = wale[p];
+      }
+    }
+    if (m_wales.empty()) fail(0, "the program knits no stitches");
+    if (!g.crossings().empty())
+      fail(g.crossings().front().line,
+           "racking carries loops across each other (a cable or twist): crossings need the knit "
+           "graph's own layout, not built yet");
+
+    // the first row's passes: one (a flat piece) or a front and a back pass (a tube)
+    KnitoutPiece piece;
+    const Loop& first = g.loop(m_wales.front());
+    piece.in_the_round = m_second_pass >= 0;
+    std::vector<LoopId> front, back;  // the first row's loops by side (a tube's halves)
+    for (LoopId w : m_wales) (g.loop(w).pass == first.pass ? front : back).push_back(w);
+    auto by_needle = [&](LoopId a, LoopId b) { return g.loop(a).needle < g.loop(b).needle; };
+    std::sort(front.begin(), front.end(), by_needle);
+    std::sort(back.begin(), back.end(), by_needle);
+    if (piece.in_the_round) {
+      const bool fb = graph::is_front_side(first.bed);
+      for (LoopId w : front)
+        if (graph::is_front_side(g.loop(w).bed) != fb)
+          fail(g.loop(w).line, "the first round's first pass knits on both beds");
+      for (LoopId w : back)
+        if (graph::is_front_side(g.loop(w).bed) == fb)
+          fail(g.loop(w).line, "the first round's second pass knits on the bed of its first");
+      if (!fb) std::swap(front, back);
+      // around the tube: the front needles left to right, then the back ones right to left
+      std::reverse(back.begin(), back.end());
+    }
+    std::vector<int> column(m_wales.size());
+    int cols = 0;
+    for (const auto* half : {&front, &back})
+      for (LoopId w : *half) column[wale[w]] = cols++;
+
+    // rows: every column once per row, the rows one after the other
+    int rows = 0;
+    for (LoopId id = 0; id < n; ++id)
+      if (!cast_on[id]) rows = std::max(rows, row[id] + 1);
+    std::vector<std::vector<LoopId>> grid(rows, std::vector<LoopId>(cols, graph::NO_LOOP));
+    std::vector<int> row_count(rows, 0);
+    for (LoopId id = 0; id < n; ++id) {
+      if (cast_on[id]) continue;
+      grid[row[id]][column[wale[id]]] = id;
+      ++row_count[row[id]];
+    }
+    for (int r = 0; r < rows; ++r)
+      if (row_count[r] != cols) {
+        // name the first loop of the row that is short (or of the next)
+        LoopId at = graph::NO_LOOP;
+        for (LoopId id : grid[r])
+          if (id != graph::NO_LOOP) at = at == graph::NO_LOOP ? id : std::min(at, id);
+        fail(at == graph::NO_LOOP ? 0 : g.loop(at).line,
+             "row " + std::to_string(r) + " has " + std::to_string(row_count[r]) + " of the piece's " +
+                 std::to_string(cols) +
+                 " stitches: shaping and short rows need the knit graph's own layout, not built "
+                 "yet");
+      }
+    const int per_row = piece.in_the_round ? 2 : 1;
+    int last_pass = -1, last_dir = 0;
+    for (int r = 0; r < rows; ++r) {
+      std::vector<LoopId> order(grid[r]);
+      std::sort(order.begin(), order.end());
+      std::map<int, int> passes;
+      for (LoopId id : order) ++passes[g.loop(id).pass];
+      if (static_cast<int>(passes.size()) != per_row)
+        fail(g.loop(order.back()).line,
+             "row " + std::to_string(r) + " is knit in " + std::to_string(passes.size()) +
+                 " passes, not " + std::to_string(per_row) +
+                 ": short rows and kickbacks need the knit graph's own layout, not built yet");
+      if (r > 0 && passes.begin()->first <= last_pass)
+        fail(g.loop(order.front()).line, "row " + std::to_string(r) + " begins before row " +
+                                             std::to_string(r - 1) + " ends");
+      last_pass = passes.rbegin()->first;
+      // the yarn goes along the columns in order: around the tube, or to and fro, turning
+      // at the edges (the first row from either edge)
+      int dir = 0;
+      for (size_t k = 1; k < order.size(); ++k) {
+        const int c0 = column[wale[order[k - 1]]], c1 = column[wale[order[k]]];
+        const int step = piece.in_the_round ? ((c1 - c0 + cols + 1) % cols) - 1 : c1 - c0;
+        if (std::abs(step) != 1 || (dir != 0 && step != dir))
+          fail(g.loop(order[k]).line,
+               "row " + std::to_string(r) +
+                   " does not go over the columns in order: every row must be one whole pass "
+                   "along them");
+        dir = step;
+      }
+      if (!piece.in_the_round && r > 0 && dir != 0 && dir == last_dir)
+        fail(g.loop(order.front()).line,
+             "row " + std::to_string(r) + " starts at the edge where row " + std::to_string(r - 1) +
+                 " started: the yarn would float back along the row");
+      if (piece.in_the_round && r > 0 && dir != 0 && last_dir != 0 && dir != last_dir)
+        fail(g.loop(order.front()).line,
+             "round " + std::to_string(r) + " goes around the other way");
+      if (dir != 0) last_dir = dir;
+    }
+    piece.pattern.rows.assign(rows, std::string(cols, 'k'));
+    for (int r = 0; r < rows; ++r)
+      for (int c = 0; c < cols; ++c) {
+        const Loop& l = g.loop(grid[r][c]);
+        bool knit = l.face == graph::Face::KNIT;
+        // a tube is seen from outside: the back bed's loops from behind
+        if (piece.in_the_round && !graph::is_front_side(l.bed)) knit = !knit;
+        piece.pattern.rows[r][c] = knit ? 'k' : 'p';
+      }
+    // (every loop below the top row is held by the one above it: a dropped one, which
+    // would ladder, leaves its column a row short, refused above)
+    return piece;
   }
-}
+
+ private:
+  // whether `l` is in the second pass of a tube's first round (a pass on the other bed right
+  // after the first one, making new columns)
+  bool m_round_second(const Loop& l) {
+    const Loop& first = m_g.loop(m_wales.front());
+    // (a first pass on both beds is a flat piece: a rib)
+    if (m_second_pass < 0 && l.pass == first.pass + 1 && m_first_beds != 3 &&
+        graph::is_front_side(l.bed) != graph::is_front_side(first.bed))
+      m_second_pass = l.pass;
+    return l.pass == m_second_pass;
+  }
+
+  const KnitGraph& m_g;
+  std::string_view m_text;
+  const std::string& m_source;
+  std::vector<LoopId> m_wales;  // the first loop of each column
+  int m_first_pass = -1, m_second_pass = -1;
+  int m_first_beds = 0;  // the beds of the first pass's loops: 1 front, 2 back, 3 both
+};
 
 }  // namespace
 
 bool is_knitout_path(const std::string& name_or_path) {
   if (name_or_path.size() > 2 && name_or_path.compare(name_or_path.size() - 2, 2, ".k") == 0)
+    return true;
+  if (name_or_path.size() > 8 &&
+      name_or_path.compare(name_or_path.size() - 8, 8, ".knitout") == 0)
     return true;
   // any other name: a regular file whose first line is knitout's header (a FIFO or device
   // is not opened here; the chart reader refuses it by name)
@@ -131,158 +248,14 @@ bool is_knitout_path(const std::string& name_or_path) {
 }
 
 KnitoutPiece parse_knitout(std::string_view text, const std::string& source_name) {
-  Reader reader(source_name);
-  std::vector<Stitch> stitches;
-  std::map<Needle, bool> cast_on;
-  size_t pos = 0;
-  if (text.substr(0, 3) == "\xEF\xBB\xBF") pos = 3;
-  int line_no = 0;
-  bool magic = false;
-  while (pos < text.size()) {
-    const size_t end = std::min(text.find('\n', pos), text.size());
-    std::string line(text.substr(pos, end - pos));
-    pos = end + 1;
-    ++line_no;
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    if (line_no == 1) {
-      if (line.rfind(KNITOUT_HEADER, 0) != 0)
-        reader.fail(1, "", "not a knitout program: the first line must be ';!knitout-N'");
-      magic = true;
-      continue;
-    }
-    const std::string code = line.substr(0, line.find(';'));
-    std::istringstream in(code);
-    std::vector<std::string> tokens;
-    for (std::string t; in >> t;) tokens.push_back(t);
-    if (tokens.empty()) continue;
-    const std::string& op = tokens[0];
-    std::string instruction = tokens[0];
-    for (size_t k = 1; k < tokens.size(); ++k) instruction += " " + tokens[k];
-
-    if (op == "in" || op == "inhook" || op == "out" || op == "outhook" || op == "releasehook") {
-      reader.carrier(line_no, instruction, tokens, 1);
-    } else if (op == "knit" || op == "purl" || op == "tuck" || op == "miss") {
-      if (tokens.size() < 3 || (tokens[1] != "+" && tokens[1] != "-"))
-        reader.fail(line_no, instruction, "expected '" + op + " +|- NEEDLE CARRIER'");
-      const Needle n = reader.needle(line_no, instruction, tokens[2]);
-      reader.carrier(line_no, instruction, tokens, 3);
-      if (op == "tuck") {
-        if (!stitches.empty())
-          reader.fail(line_no, instruction,
-                      "tucks after the cast-on (tuck stitches) are not supported yet");
-        if (cast_on[n]) reader.fail(line_no, instruction, "the needle is already cast on");
-        cast_on[n] = true;
-      } else if (op != "miss") {
-        stitches.push_back({n, op == "purl", line_no, instruction});
-      }
-    } else if (op == "rack") {
-      double r = 0;
-      const char* b = tokens.size() > 1 ? tokens[1].data() : nullptr;
-      const char* e = b ? b + tokens[1].size() : nullptr;
-      if (!b || std::from_chars(b, e, r).ptr != e)
-        reader.fail(line_no, instruction, "expected 'rack R'");
-      if (r != 0) reader.fail(line_no, instruction, "racking is not supported yet");
-    } else if (op == "xfer" || op == "split") {
-      reader.fail(line_no, instruction,
-                  "transfers (to move loops between beds or make decreases) are not supported yet");
-    } else if (op == "drop" || op == "amiss") {
-      reader.fail(line_no, instruction, "'" + op + "' is not supported yet");
-    } else if (op == "pause" || op == "stitch" || op.rfind("x-", 0) == 0) {
-      // machine settings (loop length, speed, pauses): they do not change what is knitted
-    } else {
-      reader.fail(line_no, instruction, "unknown instruction '" + op + "'");
-    }
-  }
-  if (!magic) reader.fail(1, "", "not a knitout program: the file is empty");
-  if (stitches.empty()) reader.fail(line_no, "", "the program knits no stitches");
-
-  // the columns: flat, each needle index on one bed; in the round, the same on both
-  std::map<int, std::vector<char>> beds_of;
-  for (const Stitch& s : stitches) {
-    auto& beds = beds_of[s.needle.index];
-    if (std::find(beds.begin(), beds.end(), s.needle.bed) == beds.end())
-      beds.push_back(s.needle.bed);
-  }
-  KnitoutPiece piece;
-  for (const auto& [index, beds] : beds_of)
-    if (beds.size() == 2) piece.in_the_round = true;
-  std::vector<Needle> columns;
-  if (!piece.in_the_round) {
-    for (const auto& [index, beds] : beds_of) columns.push_back({beds[0], index});
-  } else {
-    for (const auto& [needle_index, beds] : beds_of) {
-      const int index = needle_index;  // clang 14 cannot capture a structured binding
-      if (beds.size() != 2) {
-        const Stitch& s = *std::find_if(stitches.begin(), stitches.end(),
-                                        [&](const Stitch& t) { return t.needle.index == index; });
-        reader.fail(s.line, s.instruction,
-                    "a tube needs its needles on both beds, but needle " + std::to_string(index) +
-                        " is used on one bed only");
-      }
-      columns.push_back({'f', index});
-    }
-    for (auto it = beds_of.rbegin(); it != beds_of.rend(); ++it)
-      columns.push_back({'b', it->first});
-  }
-  std::map<Needle, int> column_of;
-  for (size_t c = 0; c < columns.size(); ++c) column_of[columns[c]] = static_cast<int>(c);
-  const int cols = static_cast<int>(columns.size());
-  const auto total = static_cast<int>(stitches.size());
-  check_stray_columns(reader, stitches, columns, column_of);
-  // every row one whole pass over the columns, in order: the first stitch out of order
-  // is the one named
-  const int rows = total / cols;
-  piece.pattern.rows.assign(rows, std::string(cols, 'k'));
-  for (int r = 0; r < rows; ++r) {
-    // one pass over every column in order: left to right or back (a round: once around)
-    const int first = column_of[stitches[static_cast<size_t>(r * cols)].needle];
-    // a flat row, one whole pass, starts at an edge of the piece
-    if (!piece.in_the_round && first != 0 && first != cols - 1) {
-      const Stitch& s = stitches[static_cast<size_t>(r * cols)];
-      reader.fail(s.line, s.instruction,
-                  "row " + std::to_string(r) + " starts at needle " + needle_name(s.needle) +
-                      ", not at an edge of the piece (" + needle_name(columns.front()) + " or " +
-                      needle_name(columns.back()) +
-                      "): every row must be one whole pass; shaping and short rows are not "
-                      "supported yet");
-    }
-    int step = 0;
-    for (int k = 0; k < cols; ++k) {
-      const Stitch& s = stitches[static_cast<size_t>(r * cols + k)];
-      const int c = column_of[s.needle];
-      // flat: left to right or back; in the round: once around, either way
-      if (k == 1)
-        step =
-            piece.in_the_round ? ((c - first + cols) % cols == 1 ? 1 : -1) : (c > first ? 1 : -1);
-      const int expected =
-          piece.in_the_round ? ((first + step * k) % cols + cols) % cols : first + step * k;
-      if (k > 0 && c != expected)
-        reader.fail(
-            s.line, s.instruction,
-            "row " + std::to_string(r) + " does not go over the columns in order " +
-                "(expected needle " +
-                needle_name(columns[static_cast<size_t>(std::clamp(expected, 0, cols - 1))]) +
-                "): every row must be one whole pass; shaping and short rows are not "
-                "supported yet");
-      const bool back = s.needle.bed == 'b';
-      const bool knit_front = piece.in_the_round ? !s.purl : (back == s.purl);
-      piece.pattern.rows[r][c] = knit_front ? 'k' : 'p';
-    }
-  }
-  if (total % cols != 0) {
-    const Stitch& s = stitches[static_cast<size_t>(total - total % cols)];
-    reader.fail(s.line, s.instruction,
-                "the last row has " + std::to_string(total % cols) + " of the piece's " +
-                    std::to_string(cols) +
-                    " stitches: shaping and short rows are not supported yet");
-  }
-  return piece;
+  const graph::KnitoutResult result = graph::run_knitout(text, source_name);
+  return SheetReader(result.graph, text, source_name).read();
 }
 
 KnitoutPiece load_knitout(const std::string& path) {
   std::string text;
   try {
-    text = read_input_file(path, MAX_CHART_BYTES, "knitout program");
+    text = read_input_file(path, graph::MAX_KNITOUT_BYTES, "knitout program");
   } catch (const std::runtime_error& e) {
     throw std::invalid_argument(e.what());
   }
