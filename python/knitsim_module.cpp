@@ -676,8 +676,9 @@ PYBIND11_MODULE(knitsim, m) {
       "). With `out`, writes the run as `knitsim relax --out` does (`frames`: its states along "
       "the way; without them a checkpoint every `checkpoint_every` wall seconds, default " +
       num(relax_run.checkpoint_every_s) +
-      "; `export`: also export the result there, as `knitsim relax --export` does). Returns a "
-      "Knit.";
+      "; `export`: also export the result there, as `knitsim relax --export` does). "
+      "`check_crossings`: check every step for yarns that passed through each other (the "
+      "summary's `crossings`, as --check-crossings). Returns a Knit.";
   m.def(
       "relax",
       [](std::string pattern, std::optional<int> rows, std::optional<int> cols,
@@ -694,7 +695,7 @@ PYBIND11_MODULE(knitsim, m) {
          std::optional<int> contact_points, std::optional<double> k_global,
          std::optional<double> alpha_small, std::optional<double> alpha_large,
          std::optional<int> check_every, std::optional<double> checkpoint_every, bool frames,
-         int threads, const std::string& export_format) {
+         bool check_crossings, int threads, const std::string& export_format) {
         check_export(export_format, out);
         RelaxKnitOptions o;
         // resume: a State, or a .kstate path whose knit block gives the defaults (as
@@ -783,6 +784,7 @@ PYBIND11_MODULE(knitsim, m) {
         o.run.overwrite = overwrite;
         o.run.progress = progress;
         o.run.write_frames = frames;
+        o.run.check_crossings = check_crossings;
         State resumed;
         if (resume_file) {
           resumed = read_resumed_knit_state(resume.cast<std::string>(), pattern, o.knit);
@@ -808,7 +810,8 @@ PYBIND11_MODULE(knitsim, m) {
       "max_step_halvings"_a = py::none(), "end_mass_floor"_a = py::none(),
       "contact_points"_a = py::none(), "k_global"_a = py::none(), "alpha_small"_a = py::none(),
       "alpha_large"_a = py::none(), "check_every"_a = py::none(), "checkpoint_every"_a = py::none(),
-      "frames"_a = true, "threads"_a = 0, "export"_a = "", relax_doc.c_str());
+      "frames"_a = true, "check_crossings"_a = false, "threads"_a = 0, "export"_a = "",
+      relax_doc.c_str());
 
   static const std::string relax_yarns_doc =
       "Relaxes the yarns of a .yarns, .bcc or .obj file (`knitsim relax --from PATH`): no "
@@ -830,7 +833,8 @@ PYBIND11_MODULE(knitsim, m) {
          std::optional<double> contact_reuse, std::optional<int> max_step_halvings,
          std::optional<double> end_mass_floor, std::optional<int> contact_points,
          const std::string& out, bool overwrite, bool progress, bool frames,
-         std::optional<double> checkpoint_every, int threads, const std::string& export_format) {
+         std::optional<double> checkpoint_every, bool check_crossings, int threads,
+         const std::string& export_format) {
         require_path(path, "path");
         check_export(export_format, out);
         RelaxYarnsOptions o;
@@ -853,6 +857,7 @@ PYBIND11_MODULE(knitsim, m) {
         o.run.overwrite = overwrite;
         o.run.progress = progress;
         o.run.write_frames = frames;
+        o.run.check_crossings = check_crossings;
         const auto limit = thread_limit(threads);
         auto k = std::make_unique<Knit>();
         k->result = run_interruptible([&] { return relax_yarns(path, o); });
@@ -866,8 +871,8 @@ PYBIND11_MODULE(knitsim, m) {
       "contact_solve_tolerance"_a = py::none(), "contact_reuse"_a = py::none(),
       "max_step_halvings"_a = py::none(), "end_mass_floor"_a = py::none(),
       "contact_points"_a = py::none(), "out"_a = "", "overwrite"_a = false, "progress"_a = false,
-      "frames"_a = true, "checkpoint_every"_a = py::none(), "threads"_a = 0, "export"_a = "",
-      relax_yarns_doc.c_str());
+      "frames"_a = true, "checkpoint_every"_a = py::none(), "check_crossings"_a = false,
+      "threads"_a = 0, "export"_a = "", relax_yarns_doc.c_str());
 
   // ------------------------------------------------------------- files
   py::class_<StateFile>(m, "StateFile", "A .kstate file's contents.")
@@ -916,7 +921,8 @@ PYBIND11_MODULE(knitsim, m) {
              std::optional<int> output_every, std::optional<double> time_step,
              std::optional<std::string> integrator, std::optional<bool> implicit_bending,
              std::optional<double> contact_solve_tolerance, std::optional<double> contact_reuse,
-             std::optional<int> max_step_halvings, int threads, const std::string& export_format) {
+             std::optional<int> max_step_halvings, bool check_crossings, int threads,
+             const std::string& export_format) {
             check_export(export_format, out);
             // the options override the scene's own for this run (as `knitsim simulate`'s);
             // `state` ends as the run's last
@@ -963,6 +969,7 @@ PYBIND11_MODULE(knitsim, m) {
             o.overwrite = overwrite;
             o.progress = progress;
             o.write_frames = !out.empty();
+            o.check_crossings = check_crossings;
             const auto limit = thread_limit(threads);
             py::dict report =
                 report_dict(run_interruptible([&] { return simulate_scene(run, o); }));
@@ -974,7 +981,8 @@ PYBIND11_MODULE(knitsim, m) {
           "duration"_a = py::none(), "output_every"_a = py::none(), "time_step"_a = py::none(),
           "integrator"_a = py::none(), "implicit_bending"_a = py::none(),
           "contact_solve_tolerance"_a = py::none(), "contact_reuse"_a = py::none(),
-          "max_step_halvings"_a = py::none(), "threads"_a = 0, "export"_a = "",
+          "max_step_halvings"_a = py::none(), "check_crossings"_a = false, "threads"_a = 0,
+          "export"_a = "",
           "Runs the scene to its duration (as `knitsim simulate`); `state` ends as the last "
           "state. Returns the report. `resume`: go on from a .kstate of an earlier run of this "
           "scene (into that run's `out`, the run goes on there). `duration` (s), "
@@ -1045,7 +1053,8 @@ PYBIND11_MODULE(knitsim, m) {
          std::optional<double> contact_reuse, std::optional<int> max_step_halvings,
          std::optional<double> end_mass_floor, std::optional<int> contact_points,
          std::optional<double> alpha_small, std::optional<double> alpha_large,
-         std::optional<double> yarn_friction, bool frames, int threads, bool sheet,
+         std::optional<double> yarn_friction, bool frames, bool check_crossings, int threads,
+         bool sheet,
          const std::vector<std::string>& fit, std::optional<double> k_course,
          std::optional<double> k_wale, std::optional<double> k_shear, std::optional<double> k_bend,
          std::optional<double> node_spacing) {
@@ -1077,6 +1086,7 @@ PYBIND11_MODULE(knitsim, m) {
         o.figures = write_stretch_figures;  // the plots, renders and movie
         o.progress = progress;
         o.write_frames = frames && !out.empty();
+        o.check_crossings = check_crossings;
         // the arguments first, then the files they name (as the command checks its options
         // before it reads anything)
         require_path(kstate, "kstate");
@@ -1164,7 +1174,8 @@ PYBIND11_MODULE(knitsim, m) {
       "contact_solve_tolerance"_a = py::none(), "contact_reuse"_a = py::none(),
       "max_step_halvings"_a = py::none(), "end_mass_floor"_a = py::none(),
       "contact_points"_a = py::none(), "alpha_small"_a = py::none(), "alpha_large"_a = py::none(),
-      "yarn_friction"_a = py::none(), "frames"_a = true, "threads"_a = 0, "sheet"_a = false,
+      "yarn_friction"_a = py::none(), "frames"_a = true, "check_crossings"_a = false,
+      "threads"_a = 0, "sheet"_a = false,
       "fit"_a = std::vector<std::string>{}, "k_course"_a = py::none(), "k_wale"_a = py::none(),
       "k_shear"_a = py::none(), "k_bend"_a = py::none(), "node_spacing"_a = py::none(),
       stretch_doc.c_str());

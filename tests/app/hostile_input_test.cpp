@@ -90,15 +90,15 @@ std::vector<Case> cases() {
   return {
       // ---- issue 51: the messages a user met ----
       // a knitout program under another name is read as knitout (not as a chart)
-      {"relax " + file("prog_txt.txt", swatch(14, "xfer f48 b48")) + " --out {OUT}",
-       {"prog_txt.txt:14: 'xfer f48 b48': transfers"},
+      {"relax " + file("prog_txt.txt", swatch(15, "rack 0.5")) + " --out {OUT}",
+       {"prog_txt.txt:16: 'knit + f50 1'", "a new column"},
        false,
        {"unknown stitch"}},
       {"relax " + file("prog.knitout", swatch(16, "frobnicate 3")) + " --out {OUT}",
        {"prog.knitout:16: 'frobnicate 3'"}},
       // a mistyped needle is blamed on its own line, with its instruction
       {"relax " + file("typo.k", swatch(13, "knit + f-3 1")) + " --out {OUT}",
-       {"typo.k:13: 'knit + f-3 1'", "needle f-3"}},
+       {"typo.k:13: 'knit + f-3 1'", "needle f-3 is not beside f48"}},
       {"relax " + file("typo.txt", swatch(13, "knit + f-3 1")) + " --out {OUT}",
        {"typo.txt:13: 'knit + f-3 1'"}},
       {"relax " + file("short_row.k", swatch(21, "knit + f48 1")) + " --out {OUT}",
@@ -211,14 +211,14 @@ std::vector<Case> cases() {
        {"utf8.chart:2:2", "byte 0xC3"}},
       {"relax no_such_pattern --out {OUT}", {"no_such_pattern", "not a built-in pattern"}},
       // knitout
-      {"relax " + file("rack.k", swatch(14, "rack 2")) + " --out {OUT}",
-       {"rack.k:14: 'rack 2'", "racking"}},
+      {"relax " + file("rack.k", swatch(14, "rack 40")) + " --out {OUT}",
+       {"rack.k:14: 'rack 40'", "racking"}},
       {"relax " + file("nothing.k", ";!knitout-2\nin 3\n") + " --out {OUT}",
        {"nothing.k:2", "no stitches"}},
       {"relax " + file("not_knitout.k", "knit + f1 3\n") + " --out {OUT}",
        {"not_knitout.k:1", "not a knitout program"}},
       {"relax " + file("carriers.k", swatch(15, "knit + f49 2")) + " --out {OUT}",
-       {"carriers.k:15: 'knit + f49 2'", "second carrier"}},
+       {"carriers.k:15: 'knit + f49 2'", "carrier 2 is not in"}},
       // scenes
       {"simulate " + file("unknown.json", scene(R"("gravty": [0,0,-981])")) + " --out {OUT}",
        {"gravty", "unknown key"}},

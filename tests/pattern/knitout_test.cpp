@@ -153,7 +153,7 @@ TEST(Knitout, WhatCannotBeKnitYetIsRefusedWithItsLine) {
       {head + "knit - f2 3\n",
        "prog.k:5: 'knit - f2 3': row 1 has 1 of the piece's 2 stitches"},
       {head + "knit - f2 3\nknit - f2 3\n", "prog.k:5: 'knit - f2 3': row 1 has 1 of"},
-      {";!knitout-2\nin 3\n", "prog.k: the program knits no stitches"},
+      {";!knitout-2\nin 3\n", "prog.k:2: 'in 3': the program knits no stitches"},
       // a first pass on the front bed and a second on the back: a tube of three columns
       {";!knitout-2\nin 3\nknit + f1 3\nknit + f2 3\nknit - b1 3\n", "(accepted)"},
   };
@@ -162,8 +162,8 @@ TEST(Knitout, WhatCannotBeKnitYetIsRefusedWithItsLine) {
     EXPECT_NE(got.find(c.expect), std::string::npos) << c.program << "\n→ " << got;
   }
   // a mistyped needle (f-3 for f1, a column of its own) is named on its own line, not on
-  // the rows it shifts; a row that starts inside the piece (f2 knit twice, f1 not at all)
-  // leaves a row short, named at its first stitch
+  // the rows it shifts; a row that starts inside the piece (f2 knit twice, f1 at the end
+  // of the next pass) is named at its start
   const std::string three = ";!knitout-2\nin 3\n";
   std::string typo = three, inside = three;
   for (int r = 0; r < 4; ++r)
@@ -177,7 +177,7 @@ TEST(Knitout, WhatCannotBeKnitYetIsRefusedWithItsLine) {
                                "needle) after the first row"),
             std::string::npos)
       << refusal(typo);
-  EXPECT_NE(refusal(inside).find("prog.k:10: 'knit + f2 3': row 3 has 2 of the piece's 3 stitches"),
+  EXPECT_NE(refusal(inside).find("prog.k:9: 'knit + f2 3': row 2 is knit in 2 passes"),
             std::string::npos)
       << refusal(inside);
   // machine settings do not change what is knitted

@@ -40,8 +40,9 @@ std::string line_text(std::string_view text, int n) {
 // knitout.hpp), or refuses naming the line.
 class SheetReader {
  public:
-  SheetReader(const KnitGraph& g, std::string_view text, const std::string& source)
-      : m_g(g), m_text(text), m_source(source) {}
+  SheetReader(const KnitGraph& g, std::string_view text, const std::string& source,
+              int last_line)
+      : m_g(g), m_text(text), m_source(source), m_last_line(last_line) {}
 
   [[noreturn]] void fail(int line, const std::string& what) const {
     if (line <= 0) throw std::invalid_argument(m_source + ": " + what);
@@ -85,12 +86,16 @@ class SheetReader {
         // a new column: only in the first row of stitches
         if (m_first_pass < 0) m_first_pass = l.pass;
         if (l.pass == m_first_pass) m_first_beds |= graph::is_front_side(l.bed) ? 1 : 2;
-        if (l.pass != m_first_pass && !m_round_second(l))
+        if (l.pass != m_first_pass && !m_round_second(l)) {
+          // (named after the first row's needles are checked: a mistyped needle there
+          // leaves a column to start late)
+          check_first_row_needles();
           fail(l.line, std::string("a new column (a loop on ") +
                            (parents.empty() ? "an empty needle" : "a cast-on loop") +
                            ") after the first row: a column that starts a pass late, "
                            "increases, yarn-overs and shaping need the knit graph's own layout, "
                            "not built yet");
+        }
         row[id] = 0;
         wale[id] = static_cast<int>(m_wales.size());
         m_wales.push_back(id);
@@ -100,7 +105,7 @@ class SheetReader {
         wale[id] = wale[p];
       }
     }
-    if (m_wales.empty()) fail(0, "the program knits no stitches");
+    if (m_wales.empty()) fail(m_last_line, "the program knits no stitches");
     if (!g.crossings().empty())
       fail(g.crossings().front().line,
            "racking carries loops across each other (a cable or twist): crossings need the knit "
@@ -143,27 +148,26 @@ class SheetReader {
       grid[row[id]][column[wale[id]]] = id;
       ++row_count[row[id]];
     }
-    for (int r = 0; r < rows; ++r)
+    const int per_row = piece.in_the_round ? 2 : 1;
+    int last_pass = -1, last_dir = 0;
+    for (int r = 0; r < rows; ++r) {
       if (row_count[r] != cols) {
-        // name the first loop of the row that is short (or of the next)
+        // name the first loop of the row that is short
         LoopId at = graph::NO_LOOP;
         for (LoopId id : grid[r])
           if (id != graph::NO_LOOP) at = at == graph::NO_LOOP ? id : std::min(at, id);
         fail(at == graph::NO_LOOP ? 0 : g.loop(at).line,
-             "row " + std::to_string(r) + " has " + std::to_string(row_count[r]) + " of the piece's " +
-                 std::to_string(cols) +
+             "row " + std::to_string(r) + " has " + std::to_string(row_count[r]) +
+                 " of the piece's " + std::to_string(cols) +
                  " stitches: shaping and short rows need the knit graph's own layout, not built "
                  "yet");
       }
-    const int per_row = piece.in_the_round ? 2 : 1;
-    int last_pass = -1, last_dir = 0;
-    for (int r = 0; r < rows; ++r) {
       std::vector<LoopId> order(grid[r]);
       std::sort(order.begin(), order.end());
       std::map<int, int> passes;
       for (LoopId id : order) ++passes[g.loop(id).pass];
       if (static_cast<int>(passes.size()) != per_row)
-        fail(g.loop(order.back()).line,
+        fail(g.loop(order.front()).line,
              "row " + std::to_string(r) + " is knit in " + std::to_string(passes.size()) +
                  " passes, not " + std::to_string(per_row) +
                  ": short rows and kickbacks need the knit graph's own layout, not built yet");
@@ -183,6 +187,10 @@ class SheetReader {
                    " does not go over the columns in order: every row must be one whole pass "
                    "along them");
         dir = step;
+        // neighbouring columns on neighbouring needles (on a tube, along each bed): the
+        // generator lays no float across empty needles. Named at the loop out of line
+        // with both its neighbours (a mistyped needle), else at the later one.
+        check_neighbours(order, k, r, piece.in_the_round);
       }
       if (!piece.in_the_round && r > 0 && dir != 0 && dir == last_dir)
         fail(g.loop(order.front()).line,
@@ -208,6 +216,31 @@ class SheetReader {
   }
 
  private:
+  // Neighbouring columns on neighbouring needles (on a tube, along each bed): the generator
+  // lays no float across empty needles. Checks loops order[k − 1] and order[k] of row `r`
+  // (in the order made), naming the loop out of line with both its neighbours (a mistyped
+  // needle), else the later one.
+  void check_neighbours(const std::vector<LoopId>& order, size_t k, int r, bool round) const {
+    const Loop &la = m_g.loop(order[k - 1]), &lb = m_g.loop(order[k]);
+    const bool same_side = graph::is_front_side(la.bed) == graph::is_front_side(lb.bed);
+    if ((!same_side && round) || std::abs(lb.needle - la.needle) == 1) return;
+    const bool first_odd =
+        k == 1 && (order.size() < 3 || std::abs(m_g.loop(order[2]).needle - lb.needle) == 1);
+    const Loop& odd = first_odd ? la : lb;
+    const Loop& other = first_odd ? lb : la;
+    fail(odd.line, "needle " + graph::needle_name(odd.bed, odd.needle) + " is not beside " +
+                       graph::needle_name(other.bed, other.needle) + " (line " +
+                       std::to_string(other.line) + "), its neighbour in row " + std::to_string(r) +
+                       ": the generator lays stitches on neighbouring needles");
+  }
+  // the first row's first pass, as far as it is read
+  void check_first_row_needles() const {
+    std::vector<LoopId> first;
+    for (LoopId w : m_wales)
+      if (m_g.loop(w).pass == m_first_pass) first.push_back(w);
+    for (size_t k = 1; k < first.size(); ++k) check_neighbours(first, k, 0, false);
+  }
+
   // whether `l` is in the second pass of a tube's first round (a pass on the other bed right
   // after the first one, making new columns)
   bool m_round_second(const Loop& l) {
@@ -222,6 +255,7 @@ class SheetReader {
   const KnitGraph& m_g;
   std::string_view m_text;
   const std::string& m_source;
+  int m_last_line = 0;
   std::vector<LoopId> m_wales;  // the first loop of each column
   int m_first_pass = -1, m_second_pass = -1;
   int m_first_beds = 0;  // the beds of the first pass's loops: 1 front, 2 back, 3 both
@@ -249,7 +283,7 @@ bool is_knitout_path(const std::string& name_or_path) {
 
 KnitoutPiece parse_knitout(std::string_view text, const std::string& source_name) {
   const graph::KnitoutResult result = graph::run_knitout(text, source_name);
-  return SheetReader(result.graph, text, source_name).read();
+  return SheetReader(result.graph, text, source_name, result.lines).read();
 }
 
 KnitoutPiece load_knitout(const std::string& path) {
