@@ -104,6 +104,56 @@ TEST(Knitout, PurlsMadeByTransfersReadAsPurls) {
   EXPECT_EQ(rows_of(parse_knitout(r, "racked.k")), "kk/kk");
 }
 
+TEST(Knitout, AProgramWhoseFirstRowGoesLeftIsLaidFromTheRight) {
+  // a 1×1 rib knit on both beds, the first pass from the right (as every textiles-lab
+  // program does): the same chart as from the left, the yarn entering at the right edge
+  std::string s = ";!knitout-2\nin 3\n";
+  for (int r = 0; r < 4; ++r)
+    for (int k = 0; k < 6; ++k) {
+      const int n = r % 2 == 0 ? 6 - k : k + 1;
+      s += std::string("knit ") + (r % 2 == 0 ? "- " : "+ ") + (n % 2 ? "f" : "b") +
+           std::to_string(n) + " 3\n";
+    }
+  const KnitoutPiece p = parse_knitout(s, "left.k");
+  EXPECT_TRUE(p.pattern.first_row_leftward);
+  EXPECT_EQ(rows_of(p), "kpkpkp/kpkpkp/kpkpkp/kpkpkp");
+  KnitOptions o;
+  o.rows = 4;
+  o.cols = 6;
+  const GeneratedKnit left = generate_knit(p.pattern, o);
+  Pattern right_pattern = p.pattern;
+  right_pattern.first_row_leftward = false;
+  const GeneratedKnit right = generate_knit(right_pattern, o);
+  // the yarn's first stitch is the rightmost column's, on the right (x > 0), and the last
+  // row (row 3, knit from the left) ends at the right edge too
+  int first = 0;
+  while (left.piece[first] != YarnPiece::STITCH) ++first;
+  EXPECT_EQ(left.stitch[first].col, 5);
+  EXPECT_EQ(left.stitch[first].row, 0);
+  EXPECT_GT(left.control_points.col(first + 2).x(), 0);
+  EXPECT_LT(right.control_points.col(first + 2).x(), 0);
+  EXPECT_EQ(left.stitch.back().col, 5);
+  // the same stitches: in row 1 the knit columns' yarn lies in front of the purl columns'
+  // beside them (the legs of a rib's columns sit towards the face they show), from either
+  // side; the fits differ a little (the yarn is fitted in the order it runs)
+  auto mean_z = [&](const GeneratedKnit& g, int col) {
+    double z = 0;
+    int n = 0;
+    for (int i = 0; i < g.num_segments(); ++i)
+      if (g.piece[i] == YarnPiece::STITCH && g.stitch[i].col == col && g.stitch[i].row == 1) {
+        z += g.control_points.col(i + 1).z();
+        ++n;
+      }
+    return z / n;
+  };
+  for (const GeneratedKnit* g : {&left, &right})
+    for (int c = 0; c + 1 < 6; ++c) {
+      const double front = mean_z(*g, c) - mean_z(*g, c + 1);
+      EXPECT_GT(c % 2 == 0 ? front : -front, 0.05) << (g == &left ? "left" : "right") << " " << c;
+    }
+  EXPECT_GT(left.min_distance_ratio, 0.85);
+}
+
 TEST(Knitout, ATubeOnBothBedsIsKnitInTheRound) {
   std::string s = ";!knitout-2\nin 5\n";
   for (int r = 0; r < 3; ++r) {

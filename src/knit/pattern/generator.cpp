@@ -503,8 +503,10 @@ YarnPoint closest_point(const Eigen::Matrix3Xd& cp, const Eigen::Vector3d& p, Al
 
 }  // namespace
 
-GeneratedKnit generate_knit(const Pattern& pattern_in, const KnitOptions& opt) {
-  check_options(pattern_in, opt);
+namespace {
+
+// generate_knit for a first row knit from the left
+GeneratedKnit lay_knit(const Pattern& pattern_in, const KnitOptions& opt) {
   const Pattern pattern = tile(pattern_in, opt.rows, opt.cols);
   const Dims dims = resolve_dims(opt);
   const Layout layout(pattern, opt, dims);
@@ -645,6 +647,22 @@ GeneratedKnit generate_knit(const Pattern& pattern_in, const KnitOptions& opt) {
   out.min_distance_segment_a = md.segment_a;
   out.min_distance_segment_b = md.segment_b;
   return out;
+}
+
+}  // namespace
+
+GeneratedKnit generate_knit(const Pattern& pattern, const KnitOptions& opt) {
+  check_options(pattern, opt);
+  if (!pattern.first_row_leftward) return lay_knit(pattern, opt);
+  // the mirror image of the mirrored chart's knit
+  Pattern mirrored = tile(pattern, opt.rows, opt.cols);
+  mirrored.first_row_leftward = false;
+  for (std::string& row : mirrored.rows) std::reverse(row.begin(), row.end());
+  GeneratedKnit g = lay_knit(mirrored, opt);
+  g.control_points.row(0) *= -1;
+  for (StitchCoord& s : g.stitch)
+    if (s.col >= 0) s.col = opt.cols - 1 - s.col;
+  return g;
 }
 
 Model build_knit_model(const GeneratedKnit& knit, const Params& params, double rest_scale,

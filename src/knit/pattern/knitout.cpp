@@ -200,6 +200,7 @@ class SheetReader {
         fail(g.loop(order.front()).line,
              "round " + std::to_string(r) + " goes around the other way");
       if (dir != 0) last_dir = dir;
+      if (r == 0) piece.pattern.first_row_leftward = dir < 0;
     }
     piece.pattern.rows.assign(rows, std::string(cols, 'k'));
     for (int r = 0; r < rows; ++r)

@@ -126,6 +126,7 @@ Pattern tile(const Pattern& pattern, int rows, int cols) {
     throw std::invalid_argument("tile: rows and cols must be at least 1, got " +
                                 std::to_string(rows) + " x " + std::to_string(cols));
   Pattern out;
+  out.first_row_leftward = pattern.first_row_leftward;
   out.rows.assign(rows, std::string(cols, 'k'));
   for (int r = 0; r < rows; ++r)
     for (int c = 0; c < cols; ++c)

@@ -15,6 +15,11 @@ namespace knit {
 /// column c counted from the left as seen from the front. All rows have the same length.
 struct Pattern {
   std::vector<std::string> rows;
+  /// The yarn knits row 0 from the right to the left, as seen from the front (a knitout
+  /// program whose first pass goes towards lower needles); the generator then lays the
+  /// mirror image of its rightward yarn, the same stitches with the yarn running the other
+  /// way in every row. A chart's rows start at the left.
+  bool first_row_leftward = false;
 
   int num_rows() const { return static_cast<int>(rows.size()); }
   int num_cols() const { return rows.empty() ? 0 : static_cast<int>(rows.front().size()); }
