@@ -16,7 +16,9 @@
 #include "knit/graph/chart.hpp"
 #include "knit/graph/knitout_machine.hpp"
 #include "knit/io/state_file.hpp"
+#include "knit/pattern/knitout.hpp"
 #include "knit/util/atomic_file.hpp"
+#include "knit/util/input_file.hpp"
 
 namespace knitsim {
 
@@ -137,6 +139,22 @@ nlohmann::ordered_json knitout_json(const std::string& path, const kg::KnitoutRe
   return j;
 }
 
+// what `relax` lays of the program: the sheet the generator knits, or why not
+nlohmann::ordered_json sheet_json(const std::string& path, const kg::KnitoutResult& r) {
+  const std::string text =
+      knit::read_input_file(path, kg::MAX_KNITOUT_BYTES, "knitout program");
+  try {
+    const knit::KnitoutPiece p = knit::knitout_sheet(r, text, path);
+    return {{"laid", true},
+            {"rows", p.rows()},
+            {"cols", p.cols()},
+            {"in_the_round", p.in_the_round},
+            {"first_row_leftward", p.pattern.first_row_leftward}};
+  } catch (const std::invalid_argument& e) {
+    return {{"laid", false}, {"why_not", e.what()}};
+  }
+}
+
 nlohmann::ordered_json chart_json(const std::string& path, const kg::ChartResult& r, bool loops) {
   nlohmann::ordered_json j;
   j["chart"] = path;
@@ -176,12 +194,15 @@ void register_graph(CLI::App& app) {
   cmd->add_flag("--loops", o->loops, "list every loop (its needle, course, kind, face, parents)");
   add_out_option(cmd, o->out, "write the JSON to this file", "standard output");
   cmd->callback([o]() {
-    const std::string text =
-        (is_chart(o->program)
-             ? chart_json(o->program, kg::load_chart_graph(o->program), o->loops)
-             : knitout_json(o->program, kg::load_knitout_graph(o->program), o->loops))
-            .dump(2) +
-        "\n";
+    nlohmann::ordered_json j;
+    if (is_chart(o->program)) {
+      j = chart_json(o->program, kg::load_chart_graph(o->program), o->loops);
+    } else {
+      const kg::KnitoutResult r = kg::load_knitout_graph(o->program);
+      j = knitout_json(o->program, r, o->loops);
+      j["sheet"] = sheet_json(o->program, r);
+    }
+    const std::string text = j.dump(2) + "\n";
     if (o->out.empty())
       std::cout << text;
     else

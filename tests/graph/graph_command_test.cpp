@@ -39,6 +39,24 @@ TEST(GraphCommand, PrintsTheGraphOfAProgramAsJson) {
     EXPECT_GT(f["dropped_line"].get<int>(), f["line"].get<int>());
   EXPECT_TRUE(j["free_loops"]["live"].empty());
   EXPECT_TRUE(j["problems"].empty());
+  // what relax lays of it: nothing yet, and why (its first decrease's line)
+  EXPECT_FALSE(j["sheet"]["laid"].get<bool>());
+  EXPECT_NE(j["sheet"]["why_not"].get<std::string>().find("decrease.knitout:140: 'knit - f9 3': a "
+                                                          "decrease"),
+            std::string::npos)
+      << j["sheet"];
+}
+
+TEST(GraphCommand, SaysWhatRelaxLaysOfAProgram) {
+  // the letter k in purls on stockinette: 11 rows of 14, its first pass from the right
+  const cli_test::Result r = run("graph " + KNITOUT + "k.knitout");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const nlohmann::json s = nlohmann::json::parse(r.output)["sheet"];
+  EXPECT_TRUE(s["laid"].get<bool>());
+  EXPECT_EQ(s["rows"], 11);
+  EXPECT_EQ(s["cols"], 14);
+  EXPECT_EQ(s["in_the_round"], false);
+  EXPECT_EQ(s["first_row_leftward"], true);
 }
 
 TEST(GraphCommand, ARefusedProgramNamesItsLineAndExitsOne) {

@@ -282,9 +282,13 @@ bool is_knitout_path(const std::string& name_or_path) {
   return text.substr(0, KNITOUT_HEADER.size()) == KNITOUT_HEADER;
 }
 
-KnitoutPiece parse_knitout(std::string_view text, const std::string& source_name) {
-  const graph::KnitoutResult result = graph::run_knitout(text, source_name);
+KnitoutPiece knitout_sheet(const graph::KnitoutResult& result, std::string_view text,
+                           const std::string& source_name) {
   return SheetReader(result.graph, text, source_name, result.lines).read();
+}
+
+KnitoutPiece parse_knitout(std::string_view text, const std::string& source_name) {
+  return knitout_sheet(graph::run_knitout(text, source_name), text, source_name);
 }
 
 KnitoutPiece load_knitout(const std::string& path) {

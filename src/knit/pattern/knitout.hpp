@@ -23,6 +23,7 @@
 #include <string>
 #include <string_view>
 
+#include "knit/graph/knitout_machine.hpp"
 #include "knit/pattern/pattern.hpp"
 
 namespace knit {
@@ -37,6 +38,11 @@ struct KnitoutPiece {
 /// Reads a knitout program's text; throws std::invalid_argument naming `source_name`,
 /// the line and the instruction on anything it cannot knit.
 KnitoutPiece parse_knitout(std::string_view text, const std::string& source_name);
+
+/// The sheet of a program already run (`result` of graph::run_knitout on `text`): what
+/// parse_knitout returns after running it.
+KnitoutPiece knitout_sheet(const graph::KnitoutResult& result, std::string_view text,
+                           const std::string& source_name);
 
 /// Whether `name_or_path` names a knitout program: a path ending in ".k", or a regular
 /// file of any other name whose first line is the knitout header ";!knitout-".

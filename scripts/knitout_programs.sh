@@ -1,0 +1,39 @@
+#!/usr/bin/env bash
+# The textiles-lab knitout programs (tests/data/knitout/) as `knitsim relax` reads them: for
+# each, whether it is laid as yarn (and at what size) or refused (and why); each laid one
+# is relaxed for MAX_TIME s of simulated time with every step checked for crossings, and
+# rendered. Prints a Markdown table (docs/results.md, "Knitout programs through the knit
+# graph"); the renders go to OUT/<program>.png.
+#
+#   scripts/knitout_programs.sh [OUT] [MAX_TIME]      (default out/knitout, 0.05 s)
+#
+# Takes about 5 minutes on 2 cores (the 80 × 41 garter is most of it). Needs build/knitsim.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+out=${1:-out/knitout}
+max_time=${2:-0.05}
+knitsim=build/knitsim
+mkdir -p "$out"
+echo "| program | loops in its graph | read as | relaxed $max_time s: course × wale (cm) | wall (s) | steps checked | crossings |"
+echo "|---|---|---|---|---|---|---|"
+for prog in tests/data/knitout/*.k tests/data/knitout/*.knitout; do
+  name=$(basename "$prog")
+  loops=$("$knitsim" graph "$prog" | /usr/bin/python3 -c 'import json,sys; print(json.load(sys.stdin)["loops"]["total"])')
+  run="$out/runs/$name"
+  if err=$("$knitsim" relax "$prog" --max-time "$max_time" --no-frames --quiet --check-crossings \
+             --overwrite --out "$run" 2>&1 >/dev/null); then
+    "$knitsim" render "$run/relaxed.kstate" --size 480x360 --out "$out/${name%.*}.png" >/dev/null
+    /usr/bin/python3 - "$run/summary.json" "$name" "$loops" <<'EOF'
+import json, sys
+s = json.load(open(sys.argv[1]))
+c = s["crossings"]
+shape = f'{s["rows"]} rows × {s["cols"]} columns' + (" in the round" if s["in_the_round"] else "")
+print(f'| {sys.argv[2]} | {sys.argv[3]} | {shape} | {s["course_extent_cm"]:.1f} × {s["wale_extent_cm"]:.1f} '
+      f'| {s["wall_time_s"]:.0f} | {c["steps_checked"]} | {c["count"]} |')
+EOF
+  else
+    # the reason, without the path and line (SOURCE:LINE: 'INSTRUCTION': reason)
+    line=$(printf '%s\n' "$err" | grep -m1 'error:' | sed -E "s/^knitsim: error: [^:]*:([0-9]+): '([^']*)': /line \1 (\2): /; s/: [^:]*need[s]? the knit graph's own layout.*//")
+    echo "| $name | $loops | refused: $line | | | | |"
+  fi
+done
