@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <set>
 #include <stdexcept>
 #include <vector>
 
@@ -65,7 +66,9 @@ class SheetReader {
     std::vector<int> row(n, -1), wale(n, -1);
     std::vector<char> cast_on(n, 0);
     bool stitched = false;
+    mark_knit_cast_on(cast_on);
     for (LoopId id = 0; id < n; ++id) {
+      if (cast_on[id]) continue;
       const Loop& l = g.loop(id);
       const auto parents = g.parents(id);
       if (l.kind == graph::LoopKind::TUCK)
@@ -217,6 +220,32 @@ class SheetReader {
   }
 
  private:
+  // A cast-on knit onto empty needles in several passes (machines cast on alternate needles
+  // in two passes, then knit them all): every loop before the first one knit through
+  // another is knit on an empty needle, one per needle, in more than one pass — but for a
+  // tube's first round (a pass on one bed, then one on the other). Marks them cast-on.
+  void mark_knit_cast_on(std::vector<char>& cast_on) const {
+    std::map<int, int> beds;  // pass → beds its loops are on (1 front, 2 back)
+    LoopId end = 0;
+    for (; end < m_g.num_loops(); ++end) {
+      const Loop& l = m_g.loop(end);
+      if (!m_g.parents(end).empty() || l.kind != graph::LoopKind::NEW) break;
+      beds[l.pass] |= graph::is_front_side(l.bed) ? 1 : 2;
+    }
+    // (loops tucked on empty needles are the cast-on anyway; a knit cast-on is all knit,
+    // one loop per needle)
+    std::set<std::pair<int, int>> needles;
+    for (LoopId id = 0; id < end; ++id) {
+      const Loop& l = m_g.loop(id);
+      if (l.tucked || !needles.insert({static_cast<int>(l.bed), l.needle}).second) return;
+    }
+    if (beds.size() < 2) return;
+    if (beds.size() == 2 && beds.begin()->second != 3 &&
+        beds.begin()->second + beds.rbegin()->second == 3)
+      return;  // a tube's first round
+    for (LoopId id = 0; id < end; ++id) cast_on[id] = 1;
+  }
+
   // Neighbouring columns on neighbouring needles (on a tube, along each bed): the generator
   // lays no float across empty needles. Checks loops order[k − 1] and order[k] of row `r`
   // (in the order made), naming the loop out of line with both its neighbours (a mistyped
