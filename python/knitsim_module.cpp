@@ -35,6 +35,7 @@
 #include "knit/io/export.hpp"
 #include "knit/io/state_file.hpp"
 #include "knit/io/states.hpp"
+#include "knit/pattern/graph_summary.hpp"
 #include "knit/pattern/knitout.hpp"
 #include "knit/present/stretch_figures.hpp"
 #include "knit/recipes/relax_knit.hpp"
@@ -434,6 +435,21 @@ PYBIND11_MODULE(knitsim, m) {
               tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
       },
       "threads"_a, "Use at most this many threads (0: all cores).");
+
+  m.def(
+      "knit_graph",
+      [](const std::string& path, bool loops) {
+        require_path(path, "path");
+        // (ordered JSON, whose keys keep their order through json.loads)
+        return py::module_::import("json").attr("loads")(knit_graph_json(path, loops).dump());
+      },
+      "path"_a, "loops"_a = false,
+      "The knit graph of a knitout program (.k, .knitout: run on the machine model) or a "
+      "hand-knitting chart (.chart), as `knitsim graph` prints it: a dict of its loops by kind, "
+      "face and bed, yarns, passes, free loops, crossings, stitch settings, the checks' "
+      "problems, the interpreter's notes and, for a program, `sheet` (what relax lays of it, or "
+      "why not); with `loops`, `loop_list`: every loop's id, yarn, needle, pass, course, kind, "
+      "face, direction, line, end and parents (bottom of the needle's stack first).");
 
   // ------------------------------------------------------------- State
   py::class_<State>(m, "State", "Control-point positions q and velocities v (cm, cm/s), time (s).")

@@ -7,7 +7,8 @@
 #
 #   scripts/knitout_programs.sh [OUT] [MAX_TIME]      (default out/knitout, 0.05 s)
 #
-# Takes about 5 minutes on 2 cores (the 80 × 41 garter is most of it). Needs build/knitsim.
+# Takes about 8 minutes on 2 cores (the three 80 × 123 basic-vol sheets are most of it).
+# Needs build/knitsim.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out=${1:-out/knitout}

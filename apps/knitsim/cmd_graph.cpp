@@ -1,182 +1,16 @@
 // knitsim graph PROGRAM.k|CHART.chart [--loops] [--out FILE.json]: runs a knitout program
-// on the machine model (src/knit/graph/knitout_machine.hpp), or reads a hand-knitting chart
-// (src/knit/graph/chart.hpp), and prints its knit graph's summary as JSON: the loops by kind, face
-// and bed, the yarns (carrier, in and out lines, loops, misses, courses), passes, free loops (live
-// at the end, or dropped: ladders, each with the line that made it and the one that dropped it),
-// crossings, the checks' problems and the interpreter's notes; with --loops every loop too.
-// docs/knit-graph.md describes it.
-#include <cctype>
-#include <filesystem>
+// on the machine model, or reads a hand-knitting chart, and prints its knit graph's summary
+// as JSON (the library's knit_graph_json, src/knit/pattern/graph_summary.hpp; docs/knit-graph.md).
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
 
 #include "commands.hpp"
 #include "common.hpp"
-#include "knit/graph/chart.hpp"
-#include "knit/graph/knitout_machine.hpp"
-#include "knit/io/state_file.hpp"
-#include "knit/pattern/knitout.hpp"
+#include "knit/pattern/graph_summary.hpp"
 #include "knit/util/atomic_file.hpp"
-#include "knit/util/input_file.hpp"
 
 namespace knitsim {
-
-namespace {
-
-namespace kg = knit::graph;
-
-nlohmann::ordered_json loop_json(const kg::KnitGraph& g, kg::LoopId id) {
-  const kg::Loop& l = g.loop(id);
-  nlohmann::ordered_json j = {{"id", l.id},
-                              {"yarn", l.yarn},
-                              {"needle", kg::needle_name(l.bed, l.needle)},
-                              {"pass", l.pass},
-                              {"course", l.course},
-                              {"kind", kg::kind_name(l.kind)},
-                              {"face", kg::face_name(l.face)},
-                              {"direction", l.direction == kg::Direction::PLUS ? "+" : "-"},
-                              {"line", l.line},
-                              {"end", kg::end_name(l.end)}};
-  if (l.end != kg::LoopEnd::LIVE) j["end_line"] = l.end_line;
-  const auto p = g.parents(id);
-  j["parents"] = std::vector<kg::LoopId>(p.begin(), p.end());
-  if (l.stitch_setting >= 0) j["stitch_setting"] = l.stitch_setting;
-  return j;
-}
-
-// what the graph holds, after `j`'s lines about where it came from
-void add_graph_json(nlohmann::ordered_json& j, const kg::KnitGraph& g, bool loops) {
-  const kg::GraphCheck check = g.check();
-  const auto kinds = g.count_by_kind();
-  std::size_t purl = 0, back = 0;
-  for (const kg::Loop& l : g.loops()) {
-    purl += l.face == kg::Face::PURL;
-    back += !kg::is_front_side(l.bed);
-  }
-  j["loops"] = {{"total", g.num_loops()}, {"knit", kinds[0]},
-                {"tuck", kinds[1]},       {"split", kinds[2]},
-                {"new", kinds[3]},        {"knit_face", g.num_loops() - purl},
-                {"purl_face", purl},      {"front_bed", g.num_loops() - back},
-                {"back_bed", back}};
-  j["passes"] = g.passes();
-  nlohmann::ordered_json yarns = nlohmann::ordered_json::array();
-  for (std::size_t y = 0; y < g.yarns().size(); ++y) {
-    const kg::Yarn& yarn = g.yarns()[y];
-    std::size_t made = 0, misses = 0;
-    int courses = 0;
-    for (const kg::YarnStep& s : yarn.steps) {
-      if (s.kind == kg::YarnStep::LOOP) {
-        ++made;
-        courses = std::max(courses, g.loop(s.loop).course + 1);
-      } else {
-        ++misses;
-      }
-    }
-    nlohmann::ordered_json yj = {
-        {"index", y},    {"carrier", yarn.carrier}, {"in_line", yarn.in_line}, {"hook", yarn.hook},
-        {"loops", made}, {"misses", misses},        {"courses", courses}};
-    yj["out_line"] =
-        yarn.out_line > 0 ? nlohmann::ordered_json(yarn.out_line) : nlohmann::ordered_json(nullptr);
-    if (!yarn.steps.empty()) {
-      yj["first_needle"] = kg::needle_name(yarn.steps.front().bed, yarn.steps.front().needle);
-      yj["last_needle"] = kg::needle_name(yarn.steps.back().bed, yarn.steps.back().needle);
-    }
-    yarns.push_back(yj);
-  }
-  j["yarns"] = yarns;
-  auto free_list = [&](const std::vector<kg::LoopId>& ids) {
-    nlohmann::ordered_json a = nlohmann::ordered_json::array();
-    for (kg::LoopId id : ids) {
-      const kg::Loop& l = g.loop(id);
-      nlohmann::ordered_json e = {{"loop", id},
-                                  {"needle", kg::needle_name(l.bed, l.needle)},
-                                  {"kind", kg::kind_name(l.kind)},
-                                  {"line", l.line}};
-      if (l.end == kg::LoopEnd::DROPPED) e["dropped_line"] = l.end_line;
-      a.push_back(e);
-    }
-    return a;
-  };
-  j["free_loops"] = {{"live", free_list(check.free_live)}, {"dropped", free_list(check.ladders)}};
-  nlohmann::ordered_json crossings = nlohmann::ordered_json::array();
-  for (const kg::Crossing& c : g.crossings())
-    crossings.push_back(
-        {{"front", c.front},
-         {"back", c.back},
-         {"front_needle", kg::needle_name(g.loop(c.front).bed, g.loop(c.front).needle)},
-         {"back_needle", kg::needle_name(g.loop(c.back).bed, g.loop(c.back).needle)},
-         {"line", c.line}});
-  j["crossings"] = crossings;
-  nlohmann::ordered_json settings = nlohmann::ordered_json::array();
-  for (const kg::StitchSetting& s : g.stitch_settings()) {
-    nlohmann::ordered_json e = {{"op", s.op}, {"value", s.value}, {"line", s.line}};
-    if (s.op == "stitch") e["value2"] = s.value2;
-    settings.push_back(e);
-  }
-  j["stitch_settings"] = settings;
-  j["problems"] = check.problems;
-  if (loops) {
-    nlohmann::ordered_json all = nlohmann::ordered_json::array();
-    for (kg::LoopId id = 0; id < g.num_loops(); ++id) all.push_back(loop_json(g, id));
-    j["loop_list"] = all;
-  }
-}
-
-nlohmann::ordered_json knitout_json(const std::string& path, const kg::KnitoutResult& r,
-                                    bool loops) {
-  nlohmann::ordered_json j;
-  j["program"] = path;
-  j["knitout_version"] = r.version;
-  j["lines"] = r.lines;
-  j["instructions"] = r.instructions;
-  j["headers"] = r.headers;
-  add_graph_json(j, r.graph, loops);
-  nlohmann::ordered_json notes = nlohmann::ordered_json::array();
-  for (const kg::KnitoutNote& n : r.notes)
-    notes.push_back({{"line", n.line}, {"count", n.count}, {"text", n.text}});
-  j["notes"] = notes;
-  return j;
-}
-
-// what `relax` lays of the program: the sheet the generator knits, or why not
-nlohmann::ordered_json sheet_json(const std::string& path, const kg::KnitoutResult& r) {
-  const std::string text =
-      knit::read_input_file(path, kg::MAX_KNITOUT_BYTES, "knitout program");
-  try {
-    const knit::KnitoutPiece p = knit::knitout_sheet(r, text, path);
-    return {{"laid", true},
-            {"rows", p.rows()},
-            {"cols", p.cols()},
-            {"in_the_round", p.in_the_round},
-            {"first_row_leftward", p.pattern.first_row_leftward}};
-  } catch (const std::invalid_argument& e) {
-    return {{"laid", false}, {"why_not", e.what()}};
-  }
-}
-
-nlohmann::ordered_json chart_json(const std::string& path, const kg::ChartResult& r, bool loops) {
-  nlohmann::ordered_json j;
-  j["chart"] = path;
-  j["rows"] = r.rows;
-  j["columns"] = r.columns;
-  j["in_the_round"] = r.in_the_round;
-  j["stitches_per_row"] = r.stitches;  // [0]: cast on
-  j["symbols"] = r.symbols;
-  j["twisted"] = r.twisted.size();
-  j["short_rows"] = r.short_rows.size();
-  add_graph_json(j, r.graph, loops);
-  return j;
-}
-
-// a chart by its extension; anything else is read as knitout (.k, .knitout)
-bool is_chart(const std::string& path) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return ext == ".chart";
-}
-
-}  // namespace
 
 void register_graph(CLI::App& app) {
   struct Opts {
@@ -194,15 +28,7 @@ void register_graph(CLI::App& app) {
   cmd->add_flag("--loops", o->loops, "list every loop (its needle, course, kind, face, parents)");
   add_out_option(cmd, o->out, "write the JSON to this file", "standard output");
   cmd->callback([o]() {
-    nlohmann::ordered_json j;
-    if (is_chart(o->program)) {
-      j = chart_json(o->program, kg::load_chart_graph(o->program), o->loops);
-    } else {
-      const kg::KnitoutResult r = kg::load_knitout_graph(o->program);
-      j = knitout_json(o->program, r, o->loops);
-      j["sheet"] = sheet_json(o->program, r);
-    }
-    const std::string text = j.dump(2) + "\n";
+    const std::string text = knit::knit_graph_json(o->program, o->loops).dump(2) + "\n";
     if (o->out.empty())
       std::cout << text;
     else

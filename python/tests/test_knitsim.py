@@ -579,3 +579,29 @@ def test_a_knitout_program_of_any_name_is_read_as_knitout(tmp_path):
                         "swatch4x4garter.k").read_text())
     k = knitsim.relax(str(program), max_time=0.001)
     assert k.model.knit["rows"] == 4 and k.model.knit["cols"] == 4
+
+
+def test_knit_graph_reads_a_program_as_the_command_prints_it():
+    # the purl letter k on stockinette: one yarn, every loop held, relax lays it
+    path = str(TEST_DATA / "knitout" / "k.knitout")
+    g = knitsim.knit_graph(path, loops=True)
+    printed = json.loads(subprocess.run([str(KNITSIM), "graph", path, "--loops"],
+                                        capture_output=True, text=True, check=True).stdout)
+    assert g == printed
+    assert len(g["yarns"]) == 1
+    assert g["loops"]["total"] == len(g["loop_list"])
+    assert g["sheet"] == {"laid": True, "rows": 11, "cols": 14, "in_the_round": False,
+                          "first_row_leftward": True}
+    # each loop's parents were made before it
+    assert all(p < l["id"] for l in g["loop_list"] for p in l["parents"])
+    # a program relax cannot lay says why, with its line
+    d = knitsim.knit_graph(str(TEST_DATA / "knitout" / "decrease.knitout"))
+    assert d["sheet"]["laid"] is False and ":140: " in d["sheet"]["why_not"]
+    with pytest.raises(FileNotFoundError, match="no_such.k"):
+        knitsim.knit_graph("no_such.k")
+
+
+def test_runs_check_crossings_when_asked(small_knit):
+    k = knitsim.relax("stockinette", rows=4, cols=4, max_time=0.005, check_crossings=True)
+    c = k.summary["crossings"]
+    assert c["steps_checked"] == k.summary["steps"] and c["count"] == 0 and c["first"] is None
