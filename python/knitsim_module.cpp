@@ -1070,8 +1070,7 @@ PYBIND11_MODULE(knitsim, m) {
          std::optional<double> end_mass_floor, std::optional<int> contact_points,
          std::optional<double> alpha_small, std::optional<double> alpha_large,
          std::optional<double> yarn_friction, bool frames, bool check_crossings, int threads,
-         bool sheet,
-         const std::vector<std::string>& fit, std::optional<double> k_course,
+         bool sheet, const std::vector<std::string>& fit, std::optional<double> k_course,
          std::optional<double> k_wale, std::optional<double> k_shear, std::optional<double> k_bend,
          std::optional<double> node_spacing) {
         StretchOptions o;
@@ -1191,8 +1190,7 @@ PYBIND11_MODULE(knitsim, m) {
       "max_step_halvings"_a = py::none(), "end_mass_floor"_a = py::none(),
       "contact_points"_a = py::none(), "alpha_small"_a = py::none(), "alpha_large"_a = py::none(),
       "yarn_friction"_a = py::none(), "frames"_a = true, "check_crossings"_a = false,
-      "threads"_a = 0, "sheet"_a = false,
-      "fit"_a = std::vector<std::string>{}, "k_course"_a = py::none(), "k_wale"_a = py::none(),
-      "k_shear"_a = py::none(), "k_bend"_a = py::none(), "node_spacing"_a = py::none(),
-      stretch_doc.c_str());
+      "threads"_a = 0, "sheet"_a = false, "fit"_a = std::vector<std::string>{},
+      "k_course"_a = py::none(), "k_wale"_a = py::none(), "k_shear"_a = py::none(),
+      "k_bend"_a = py::none(), "node_spacing"_a = py::none(), stretch_doc.c_str());
 }

@@ -103,9 +103,8 @@ void print_report(const knit::RunReport& report, const std::string& out_dir) {
               << (c["count"] == 1 ? " crossing" : " crossings");
     if (!c["first"].is_null())
       std::cout << "; the first at t = " << quantity(c["first"]["time_s"], "s") << ", segments "
-                << c["first"]["segments"][0] << " and " << c["first"]["segments"][1]
-                << " (yarns " << c["first"]["yarns"][0] << " and " << c["first"]["yarns"][1]
-                << ")";
+                << c["first"]["segments"][0] << " and " << c["first"]["segments"][1] << " (yarns "
+                << c["first"]["yarns"][0] << " and " << c["first"]["yarns"][1] << ")";
     std::cout << "\n";
   }
   if (report.status == knit::StepStatus::INTERRUPTED) {

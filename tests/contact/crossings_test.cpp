@@ -144,8 +144,7 @@ int linking_number(const Ring& a, const Ring& b) {
     const Vector3d &p = a[i], &q = a[(i + 1) % na];
     for (int j = 0; j < nb; ++j) {
       const Vector3d &r = b[j], &s = b[(j + 1) % nb];
-      const Eigen::Vector2d d1 = (q - p).head<2>(), d2 = (s - r).head<2>(),
-                            w = (r - p).head<2>();
+      const Eigen::Vector2d d1 = (q - p).head<2>(), d2 = (s - r).head<2>(), w = (r - p).head<2>();
       const double den = d1.x() * d2.y() - d1.y() * d2.x();
       if (den == 0) continue;
       const double t = (w.x() * d2.y() - w.y() * d2.x()) / den;
@@ -181,14 +180,16 @@ TEST(EdgeCrossings, EveryChangeOfTwoRingsLinkingNumberIsACrossingFound) {
     int found = 0;
     for (int i = 0; i < n; ++i)
       for (int j = 0; j < n; ++j) {
-        const MovingEdge ea{a0[i], a0[(i + 1) % n], a1[i] - a0[i], a1[(i + 1) % n] - a0[(i + 1) % n]};
-        const MovingEdge eb{b0[j], b0[(j + 1) % n], b1[j] - b0[j], b1[(j + 1) % n] - b0[(j + 1) % n]};
+        const MovingEdge ea{a0[i], a0[(i + 1) % n], a1[i] - a0[i],
+                            a1[(i + 1) % n] - a0[(i + 1) % n]};
+        const MovingEdge eb{b0[j], b0[(j + 1) % n], b1[j] - b0[j],
+                            b1[(j + 1) % n] - b0[(j + 1) % n]};
         found += static_cast<int>(edge_crossings(ea, eb).size());
       }
     const int dlk = linking_number(a1, b1) - linking_number(a0, b0);
     // each crossing changes the linking number by ±1
-    EXPECT_EQ(((found - dlk) % 2 + 2) % 2, 0) << "trial " << trial << ": " << found
-                                              << " crossings, linking number changed by " << dlk;
+    EXPECT_EQ(((found - dlk) % 2 + 2) % 2, 0)
+        << "trial " << trial << ": " << found << " crossings, linking number changed by " << dlk;
     EXPECT_GE(found, std::abs(dlk)) << "trial " << trial;
     changed += dlk != 0;
     with_crossings += found > 0;
@@ -401,8 +402,8 @@ TEST(FindCrossings, KnitsRelaxWithoutAYarnPassingThroughAnother) {
       ASSERT_EQ(r.report.status, StepStatus::OK) << pattern << ": " << r.report.message;
       const auto& c = r.report.summary.at("crossings");
       EXPECT_EQ(c.at("steps_checked").get<long long>(), r.report.steps) << pattern;
-      EXPECT_EQ(c.at("count").get<long long>(), 0) << pattern << (round ? " (round)" : "") << ": "
-                                                    << c.dump();
+      EXPECT_EQ(c.at("count").get<long long>(), 0)
+          << pattern << (round ? " (round)" : "") << ": " << c.dump();
     }
 }
 

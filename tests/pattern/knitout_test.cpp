@@ -5,8 +5,8 @@
 
 #include <filesystem>
 #include <fstream>
-#include <set>
 #include <iterator>
+#include <set>
 #include <string>
 
 #include "knit/contact/crossings.hpp"
@@ -98,9 +98,10 @@ TEST(Knitout, PurlsMadeByTransfersReadAsPurls) {
   EXPECT_FALSE(p.in_the_round);
   EXPECT_EQ(rows_of(p), "kkkk/kpkp/kkkk");
   // racked transfers that bring each loop back to its own column change nothing
-  std::string r = ";!knitout-2\nin 3\nknit + f1 3\nknit + f2 3\nxfer f2 b2\nrack 1\n"
-                  "xfer b2 f3\nrack 0\nxfer f3 b3\nrack -1\nxfer b3 f2\nrack 0\n"
-                  "knit - f2 3\nknit - f1 3\n";
+  std::string r =
+      ";!knitout-2\nin 3\nknit + f1 3\nknit + f2 3\nxfer f2 b2\nrack 1\n"
+      "xfer b2 f3\nrack 0\nxfer f3 b3\nrack -1\nxfer b3 f2\nrack 0\n"
+      "knit - f2 3\nknit - f1 3\n";
   EXPECT_EQ(rows_of(parse_knitout(r, "racked.k")), "kk/kk");
 }
 
@@ -157,9 +158,10 @@ TEST(Knitout, AProgramWhoseFirstRowGoesLeftIsLaidFromTheRight) {
 TEST(Knitout, ACastOnKnitInTwoPassesIsNotARow) {
   // as machines cast on: every other needle from the right, the others back from the left,
   // then two rows over them all
-  const std::string s = ";!knitout-2\nin 3\nknit - f4 3\nknit - f2 3\nknit + f1 3\nknit + f3 3\n"
-                        "knit - f4 3\nknit - f3 3\nknit - f2 3\nknit - f1 3\n"
-                        "knit + f1 3\nknit + f2 3\nknit + f3 3\nknit + f4 3\n";
+  const std::string s =
+      ";!knitout-2\nin 3\nknit - f4 3\nknit - f2 3\nknit + f1 3\nknit + f3 3\n"
+      "knit - f4 3\nknit - f3 3\nknit - f2 3\nknit - f1 3\n"
+      "knit + f1 3\nknit + f2 3\nknit + f3 3\nknit + f4 3\n";
   const KnitoutPiece p = parse_knitout(s, "castOn.k");
   EXPECT_EQ(p.rows(), 2);
   EXPECT_EQ(p.cols(), 4);
@@ -215,8 +217,7 @@ TEST(Knitout, WhatCannotBeKnitYetIsRefusedWithItsLine) {
       {head + "knit ^ f2 3\n", "expected a direction"},
       {head + "frobnicate\n", "prog.k:5: 'frobnicate': unknown"},
       // pieces that are not rectangles
-      {head + "knit - f2 3\n",
-       "prog.k:5: 'knit - f2 3': row 1 has 1 of the piece's 2 stitches"},
+      {head + "knit - f2 3\n", "prog.k:5: 'knit - f2 3': row 1 has 1 of the piece's 2 stitches"},
       {head + "knit - f2 3\nknit - f2 3\n", "prog.k:5: 'knit - f2 3': row 1 has 1 of"},
       {";!knitout-2\nin 3\n", "prog.k:2: 'in 3': the program knits no stitches"},
       // a first pass on the front bed and a second on the back: a tube of three columns
@@ -257,12 +258,16 @@ TEST(Knitout, WhatCannotBeKnitYetIsRefusedWithItsLine) {
 // graph's own layout).
 TEST(Knitout, TheTextilesLabProgramsOfOneYarnReadAsSheets) {
   const std::string dir = std::string(KNIT_TEST_DATA) + "/knitout/";
-  const std::set<std::string> sheets = {
-      "Tutorial1_helloworld.k",           "Tutorial3_garter.k",
-      "Tutorial3_piqueribbing.k",         "Tutorial3_wafflestitch.k",
-      "k.knitout",                        "rectangle.knitout",
-      "basic-vol-1_singlejersey.knitout", "basic-vol-1_rib-1x1.knitout",
-      "basic-vol-1_rib-2x2.knitout",      "image-kp-half-rib.k"};
+  const std::set<std::string> sheets = {"Tutorial1_helloworld.k",
+                                        "Tutorial3_garter.k",
+                                        "Tutorial3_piqueribbing.k",
+                                        "Tutorial3_wafflestitch.k",
+                                        "k.knitout",
+                                        "rectangle.knitout",
+                                        "basic-vol-1_singlejersey.knitout",
+                                        "basic-vol-1_rib-1x1.knitout",
+                                        "basic-vol-1_rib-2x2.knitout",
+                                        "image-kp-half-rib.k"};
   int refused = 0;
   for (const auto& entry : std::filesystem::directory_iterator(dir)) {
     const std::string name = entry.path().filename().string();

@@ -42,8 +42,7 @@ Cubic coplanarity(const MovingEdge& a, const MovingEdge& b) {
 
 // the parameters (u on a, v on b) where the two edges' lines come closest at step
 // fraction s; false when the lines are (nearly) parallel
-bool closest_parameters(const MovingEdge& a, const MovingEdge& b, double s, double& u,
-                        double& v) {
+bool closest_parameters(const MovingEdge& a, const MovingEdge& b, double s, double& u, double& v) {
   const Eigen::Vector3d a0 = a.p0 + s * a.d0, a1 = a.p1 + s * a.d1;
   const Eigen::Vector3d b0 = b.p0 + s * b.d0, b1 = b.p1 + s * b.d1;
   const Eigen::Vector3d e = a1 - a0, g = b1 - b0, r = a0 - b0;
@@ -111,8 +110,8 @@ std::vector<SegmentCrossing> find_crossings(const Model& model, const Eigen::Vec
                                             const Eigen::VectorXd& q1, int samples_per_segment) {
   if (q0.size() != model.num_dof() || q1.size() != model.num_dof())
     throw std::invalid_argument("find_crossings: the states have " + std::to_string(q0.size()) +
-                                " and " + std::to_string(q1.size()) +
-                                " coordinates, the model " + std::to_string(model.num_dof()));
+                                " and " + std::to_string(q1.size()) + " coordinates, the model " +
+                                std::to_string(model.num_dof()));
   if (samples_per_segment < 1 || samples_per_segment > 64)
     throw std::invalid_argument("find_crossings: samples_per_segment must be in [1, 64], got " +
                                 std::to_string(samples_per_segment));
@@ -179,7 +178,8 @@ std::vector<SegmentCrossing> find_crossings(const Model& model, const Eigen::Vec
                 first.step_fraction = c.s;
                 first.u_a = (ka + c.u) / P;
                 first.u_b = (kb + c.v) / P;
-                first.point = ea.p0 + c.s * ea.d0 + c.u * (ea.p1 + c.s * ea.d1 - ea.p0 - c.s * ea.d0);
+                first.point =
+                    ea.p0 + c.s * ea.d0 + c.u * (ea.p1 + c.s * ea.d1 - ea.p0 - c.s * ea.d0);
               }
             }
           }

@@ -93,8 +93,8 @@ struct GeneratedKnit {
 /// column 0 at the left as seen from the front). Row 0's yarn runs from the left, or with
 /// pattern.first_row_leftward from the right: the mirror image (x → −x) of the knit of the
 /// mirrored chart, whose stitches are the same (a loop of the model is symmetric about its
-/// column's centre); a tube's columns then sit one column further round. Segment count: rows·cols·k stitches,
-/// plus segments_per_turn for each of the rows − 1 turns of a flat piece, plus
+/// column's centre); a tube's columns then sit one column further round. Segment count: rows·cols·k
+/// stitches, plus segments_per_turn for each of the rows − 1 turns of a flat piece, plus
 /// segments_per_tail at each end; control points = segments + 3. Throws
 /// std::invalid_argument naming the option on bad input.
 GeneratedKnit generate_knit(const Pattern& pattern, const KnitOptions& options);

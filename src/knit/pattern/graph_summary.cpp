@@ -132,8 +132,7 @@ nlohmann::ordered_json knitout_json(const std::string& path, const kg::KnitoutRe
 
 // what `relax` lays of the program: the sheet the generator knits, or why not
 nlohmann::ordered_json sheet_json(const std::string& path, const kg::KnitoutResult& r) {
-  const std::string text =
-      read_input_file(path, kg::MAX_KNITOUT_BYTES, "knitout program");
+  const std::string text = read_input_file(path, kg::MAX_KNITOUT_BYTES, "knitout program");
   try {
     const KnitoutPiece p = knitout_sheet(r, text, path);
     return {{"laid", true},
@@ -159,7 +158,6 @@ nlohmann::ordered_json chart_json(const std::string& path, const kg::ChartResult
   add_graph_json(j, r.graph, loops);
   return j;
 }
-
 
 }  // namespace
 

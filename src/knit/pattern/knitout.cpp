@@ -41,8 +41,7 @@ std::string line_text(std::string_view text, int n) {
 // knitout.hpp), or refuses naming the line.
 class SheetReader {
  public:
-  SheetReader(const KnitGraph& g, std::string_view text, const std::string& source,
-              int last_line)
+  SheetReader(const KnitGraph& g, std::string_view text, const std::string& source, int last_line)
       : m_g(g), m_text(text), m_source(source), m_last_line(last_line) {}
 
   [[noreturn]] void fail(int line, const std::string& what) const {
@@ -72,10 +71,12 @@ class SheetReader {
       const Loop& l = g.loop(id);
       const auto parents = g.parents(id);
       if (l.kind == graph::LoopKind::TUCK)
-        fail(l.line, "a tuck beside the loops a needle holds: tucks after the cast-on need the "
-                     "knit graph's own layout, not built yet");
+        fail(l.line,
+             "a tuck beside the loops a needle holds: tucks after the cast-on need the "
+             "knit graph's own layout, not built yet");
       if (l.kind == graph::LoopKind::SPLIT)
-        fail(l.line, "a split: transfers that knit need the knit graph's own layout, not built yet");
+        fail(l.line,
+             "a split: transfers that knit need the knit graph's own layout, not built yet");
       if (l.kind == graph::LoopKind::NEW && l.tucked && !stitched) {
         cast_on[id] = 1;
         continue;
@@ -175,8 +176,8 @@ class SheetReader {
                  " passes, not " + std::to_string(per_row) +
                  ": short rows and kickbacks need the knit graph's own layout, not built yet");
       if (r > 0 && passes.begin()->first <= last_pass)
-        fail(g.loop(order.front()).line, "row " + std::to_string(r) + " begins before row " +
-                                             std::to_string(r - 1) + " ends");
+        fail(g.loop(order.front()).line,
+             "row " + std::to_string(r) + " begins before row " + std::to_string(r - 1) + " ends");
       last_pass = passes.rbegin()->first;
       // the yarn goes along the columns in order: around the tube, or to and fro, turning
       // at the edges (the first row from either edge)
@@ -296,8 +297,7 @@ class SheetReader {
 bool is_knitout_path(const std::string& name_or_path) {
   if (name_or_path.size() > 2 && name_or_path.compare(name_or_path.size() - 2, 2, ".k") == 0)
     return true;
-  if (name_or_path.size() > 8 &&
-      name_or_path.compare(name_or_path.size() - 8, 8, ".knitout") == 0)
+  if (name_or_path.size() > 8 && name_or_path.compare(name_or_path.size() - 8, 8, ".knitout") == 0)
     return true;
   // any other name: a regular file whose first line is knitout's header (a FIFO or device
   // is not opened here; the chart reader refuses it by name)

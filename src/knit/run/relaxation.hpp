@@ -34,8 +34,8 @@ struct RelaxOptions {
   bool continue_in_place = false;
   /// The totals of the state resumed (RunOptions::resumed_totals).
   std::optional<RunTotals> resumed_totals;
-  std::string resume_command;  ///< written into the summary of an interrupted run
-  int halving_calm_steps = 0;  ///< RunOptions::halving_calm_steps
+  std::string resume_command;    ///< written into the summary of an interrupted run
+  int halving_calm_steps = 0;    ///< RunOptions::halving_calm_steps
   bool check_crossings = false;  ///< RunOptions::check_crossings
   /// With contact reuse (SolverSettings::contact_reuse ρ > 0): while the knit is far from
   /// rest its reuse distances widen, to ρ r · clamp(R / R₀, 1, contact_reuse_widen) with R
