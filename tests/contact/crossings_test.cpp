@@ -201,19 +201,24 @@ TEST(EdgeCrossings, EveryChangeOfTwoRingsLinkingNumberIsACrossingFound) {
 
 // ---- yarns of a model ----
 
-// two straight yarns of 8 segments, 4 cm long: a along x at z = 0, b along y at z = 1,
-// crossing (seen from above) at x = y = 0.25, the middle of a segment of each
-Model two_yarns(Eigen::VectorXd& q) {
-  ModelBuilder b;
+// two straight yarns of 8 segments, 4 cm long, in `b`: a along x at z = 0, b along y at
+// z = height, crossing (seen from above) at x = y = 0.25, the middle of a segment of each
+void add_crossed_yarns(ModelBuilder& b, double height) {
   Eigen::Matrix3Xd ya = test::line(8, 4.0), yb = test::line(8, 4.0);
   ya.row(0).array() -= 2;
   ya.row(1).setConstant(0.25);
   yb.row(0).array() -= 2;
   yb.row(1) = yb.row(0);
   yb.row(0).setConstant(0.25);
-  yb.row(2).setConstant(1.0);
+  yb.row(2).setConstant(height);
   b.add_yarn(ya);
   b.add_yarn(yb);
+}
+
+// the two yarns, b 1 cm above a
+Model two_yarns(Eigen::VectorXd& q) {
+  ModelBuilder b;
+  add_crossed_yarns(b, 1.0);
   Params p;
   Model m = b.build(p);
   q = b.positions();
@@ -279,22 +284,14 @@ TEST(FindCrossings, BadInputIsRefused) {
   EXPECT_THROW(find_crossings(m, q0, q0, 0), std::invalid_argument);
 }
 
-// ---- physics: contact stops a yarn at a small step, and a long step tunnels ----
+// ---- physics: contact stops a yarn shot at another; without contact it flies through ----
 
 // yarn a pinned at both ends along x; yarn b along y, SHOT_HEIGHT above, flying down at
 // SHOT_SPEED
 constexpr double SHOT_SPEED = 30, SHOT_HEIGHT = 1.0;
-Model shot_yarn(State& s, double speed = SHOT_SPEED, double height = SHOT_HEIGHT) {
+Model shot_yarn(State& s) {
   ModelBuilder b;
-  Eigen::Matrix3Xd ya = test::line(8, 4.0), yb = test::line(8, 4.0);
-  ya.row(0).array() -= 2;
-  ya.row(1).setConstant(0.25);
-  yb.row(0).array() -= 2;
-  yb.row(1) = yb.row(0);
-  yb.row(0).setConstant(0.25);
-  yb.row(2).setConstant(height);
-  b.add_yarn(ya);
-  b.add_yarn(yb);
+  add_crossed_yarns(b, SHOT_HEIGHT);
   Params p;
   p.gravity.setZero();
   b.add_pin({{0, 0.0}, Vector3d::Zero()});
@@ -304,7 +301,7 @@ Model shot_yarn(State& s, double speed = SHOT_SPEED, double height = SHOT_HEIGHT
   m.pins[1].origin = point_position(m, b.positions(), {7, 1.0});
   s.q = b.positions();
   s.v = Eigen::VectorXd::Zero(s.q.size());
-  for (int cp = m.yarns[1].cp_begin; cp < m.yarns[1].cp_end; ++cp) s.v[3 * cp + 2] = -speed;
+  for (int cp = m.yarns[1].cp_begin; cp < m.yarns[1].cp_end; ++cp) s.v[3 * cp + 2] = -SHOT_SPEED;
   return m;
 }
 
