@@ -232,6 +232,7 @@ struct SolverArgs {
   std::optional<bool> implicit_bending;
   std::optional<double> contact_solve_tolerance, contact_reuse;
   std::optional<int> max_step_halvings;
+  std::optional<bool> refuse_crossings;
   void apply(Params& p) const {
     if (time_step) p.solver.time_step = *time_step;
     if (integrator) p.solver.integrator = integrator_arg(*integrator);
@@ -239,6 +240,7 @@ struct SolverArgs {
     if (contact_solve_tolerance) p.solver.contact_solve_tolerance = *contact_solve_tolerance;
     if (contact_reuse) p.solver.contact_reuse = *contact_reuse;
     if (max_step_halvings) p.solver.max_step_halvings = *max_step_halvings;
+    if (refuse_crossings) p.solver.refuse_crossings = *refuse_crossings;
   }
 };
 
@@ -707,7 +709,8 @@ PYBIND11_MODULE(knitsim, m) {
          std::optional<double> contact_reuse_widen_residual, std::optional<double> time_step,
          std::optional<std::string> integrator, std::optional<bool> implicit_bending,
          std::optional<double> contact_solve_tolerance, std::optional<double> contact_reuse,
-         std::optional<int> max_step_halvings, std::optional<double> end_mass_floor,
+         std::optional<int> max_step_halvings, std::optional<bool> refuse_crossings,
+         std::optional<double> end_mass_floor,
          std::optional<int> contact_points, std::optional<double> k_global,
          std::optional<double> alpha_small, std::optional<double> alpha_large,
          std::optional<int> check_every, std::optional<double> checkpoint_every, bool frames,
@@ -757,7 +760,8 @@ PYBIND11_MODULE(knitsim, m) {
         o.params = params_over(o.params, params, "relax");
         const SolverArgs solver{time_step,        integrator,
                                 implicit_bending, contact_solve_tolerance,
-                                contact_reuse,    max_step_halvings};
+                                contact_reuse,    max_step_halvings,
+                                refuse_crossings};
         solver.apply(o.params);
         if (end_mass_floor) o.params.discretisation.end_mass_floor = *end_mass_floor;
         if (contact_points) o.params.discretisation.contact_points = *contact_points;
@@ -823,7 +827,8 @@ PYBIND11_MODULE(knitsim, m) {
       "contact_reuse_widen_residual"_a = py::none(), "time_step"_a = py::none(),
       "integrator"_a = py::none(), "implicit_bending"_a = py::none(),
       "contact_solve_tolerance"_a = py::none(), "contact_reuse"_a = py::none(),
-      "max_step_halvings"_a = py::none(), "end_mass_floor"_a = py::none(),
+      "max_step_halvings"_a = py::none(), "refuse_crossings"_a = py::none(),
+      "end_mass_floor"_a = py::none(),
       "contact_points"_a = py::none(), "k_global"_a = py::none(), "alpha_small"_a = py::none(),
       "alpha_large"_a = py::none(), "check_every"_a = py::none(), "checkpoint_every"_a = py::none(),
       "frames"_a = true, "check_crossings"_a = false, "threads"_a = 0, "export"_a = "",
@@ -847,6 +852,7 @@ PYBIND11_MODULE(knitsim, m) {
          std::optional<double> time_step, std::optional<std::string> integrator,
          std::optional<bool> implicit_bending, std::optional<double> contact_solve_tolerance,
          std::optional<double> contact_reuse, std::optional<int> max_step_halvings,
+         std::optional<bool> refuse_crossings,
          std::optional<double> end_mass_floor, std::optional<int> contact_points,
          const std::string& out, bool overwrite, bool progress, bool frames,
          std::optional<double> checkpoint_every, bool check_crossings, int threads,
@@ -859,7 +865,8 @@ PYBIND11_MODULE(knitsim, m) {
         o.params = params_over(o.params, params, "relax_yarns");
         const SolverArgs solver{time_step,        integrator,
                                 implicit_bending, contact_solve_tolerance,
-                                contact_reuse,    max_step_halvings};
+                                contact_reuse,    max_step_halvings,
+                                refuse_crossings};
         solver.apply(o.params);
         if (end_mass_floor) o.params.discretisation.end_mass_floor = *end_mass_floor;
         if (contact_points) o.params.discretisation.contact_points = *contact_points;
@@ -885,7 +892,8 @@ PYBIND11_MODULE(knitsim, m) {
       "k_global"_a = py::none(), "params"_a = py::none(), "time_step"_a = py::none(),
       "integrator"_a = py::none(), "implicit_bending"_a = py::none(),
       "contact_solve_tolerance"_a = py::none(), "contact_reuse"_a = py::none(),
-      "max_step_halvings"_a = py::none(), "end_mass_floor"_a = py::none(),
+      "max_step_halvings"_a = py::none(), "refuse_crossings"_a = py::none(),
+      "end_mass_floor"_a = py::none(),
       "contact_points"_a = py::none(), "out"_a = "", "overwrite"_a = false, "progress"_a = false,
       "frames"_a = true, "checkpoint_every"_a = py::none(), "check_crossings"_a = false,
       "threads"_a = 0, "export"_a = "", relax_yarns_doc.c_str());
@@ -937,7 +945,8 @@ PYBIND11_MODULE(knitsim, m) {
              std::optional<int> output_every, std::optional<double> time_step,
              std::optional<std::string> integrator, std::optional<bool> implicit_bending,
              std::optional<double> contact_solve_tolerance, std::optional<double> contact_reuse,
-             std::optional<int> max_step_halvings, bool check_crossings, int threads,
+             std::optional<int> max_step_halvings, std::optional<bool> refuse_crossings,
+             bool check_crossings, int threads,
              const std::string& export_format) {
             check_export(export_format, out);
             // the options override the scene's own for this run (as `knitsim simulate`'s);
@@ -945,7 +954,8 @@ PYBIND11_MODULE(knitsim, m) {
             Scene run = s;
             const SolverArgs solver{time_step,        integrator,
                                     implicit_bending, contact_solve_tolerance,
-                                    contact_reuse,    max_step_halvings};
+                                    contact_reuse,    max_step_halvings,
+                                refuse_crossings};
             solver.apply(run.model.params);
             if (output_every) run.output_every = *output_every;
             if (duration) {
@@ -997,7 +1007,8 @@ PYBIND11_MODULE(knitsim, m) {
           "duration"_a = py::none(), "output_every"_a = py::none(), "time_step"_a = py::none(),
           "integrator"_a = py::none(), "implicit_bending"_a = py::none(),
           "contact_solve_tolerance"_a = py::none(), "contact_reuse"_a = py::none(),
-          "max_step_halvings"_a = py::none(), "check_crossings"_a = false, "threads"_a = 0,
+          "max_step_halvings"_a = py::none(), "refuse_crossings"_a = py::none(),
+          "check_crossings"_a = false, "threads"_a = 0,
           "export"_a = "",
           "Runs the scene to its duration (as `knitsim simulate`); `state` ends as the last "
           "state. Returns the report. `resume`: go on from a .kstate of an earlier run of this "
@@ -1067,6 +1078,7 @@ PYBIND11_MODULE(knitsim, m) {
          std::optional<double> time_step, std::optional<std::string> integrator,
          std::optional<bool> implicit_bending, std::optional<double> contact_solve_tolerance,
          std::optional<double> contact_reuse, std::optional<int> max_step_halvings,
+         std::optional<bool> refuse_crossings,
          std::optional<double> end_mass_floor, std::optional<int> contact_points,
          std::optional<double> alpha_small, std::optional<double> alpha_large,
          std::optional<double> yarn_friction, bool frames, bool check_crossings, int threads,
@@ -1079,7 +1091,8 @@ PYBIND11_MODULE(knitsim, m) {
         o.params = params_over(o.params, params, "stretch");
         const SolverArgs solver{time_step,        integrator,
                                 implicit_bending, contact_solve_tolerance,
-                                contact_reuse,    max_step_halvings};
+                                contact_reuse,    max_step_halvings,
+                                refuse_crossings};
         solver.apply(o.params);
         if (end_mass_floor) o.params.discretisation.end_mass_floor = *end_mass_floor;
         if (contact_points) o.params.discretisation.contact_points = *contact_points;
@@ -1123,6 +1136,7 @@ PYBIND11_MODULE(knitsim, m) {
           note(contact_solve_tolerance.has_value(), "contact_solve_tolerance");
           note(contact_reuse.has_value(), "contact_reuse");
           note(max_step_halvings.has_value(), "max_step_halvings");
+          note(refuse_crossings.has_value(), "refuse_crossings");
           note(end_mass_floor.has_value(), "end_mass_floor");
           note(yarn_friction.has_value(), "yarn_friction");
           note(!resume.empty(), "resume");
@@ -1187,7 +1201,8 @@ PYBIND11_MODULE(knitsim, m) {
       "max_force"_a = stretch_options.max_force, "time_step"_a = py::none(),
       "integrator"_a = py::none(), "implicit_bending"_a = py::none(),
       "contact_solve_tolerance"_a = py::none(), "contact_reuse"_a = py::none(),
-      "max_step_halvings"_a = py::none(), "end_mass_floor"_a = py::none(),
+      "max_step_halvings"_a = py::none(), "refuse_crossings"_a = py::none(),
+      "end_mass_floor"_a = py::none(),
       "contact_points"_a = py::none(), "alpha_small"_a = py::none(), "alpha_large"_a = py::none(),
       "yarn_friction"_a = py::none(), "frames"_a = true, "check_crossings"_a = false,
       "threads"_a = 0, "sheet"_a = false, "fit"_a = std::vector<std::string>{},

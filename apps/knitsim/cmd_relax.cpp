@@ -30,6 +30,7 @@ void register_relax(CLI::App& app) {
     double contact_reuse = knit::relax_knit_params().solver.contact_reuse;
     double contact_solve_tolerance = knit::relax_knit_params().solver.contact_solve_tolerance;
     bool implicit_bending = knit::relax_knit_params().solver.implicit_bending;
+    bool refuse_crossings = knit::relax_knit_params().solver.refuse_crossings;
     int max_step_halvings = knit::relax_knit_params().solver.max_step_halvings;
     double shrink = knit::RELAX_SHRINK;
     int threads = 0;
@@ -91,6 +92,7 @@ void register_relax(CLI::App& app) {
                            " with --from (imported swatches start tightly packed)");
   add_integrator_option(cmd, o->integrator);
   add_implicit_bending_option(cmd, o->implicit_bending, true);
+  add_refuse_crossings_option(cmd, o->refuse_crossings, true);
   add_contact_solve_tolerance_option(cmd, o->contact_solve_tolerance);
   add_contact_reuse_option(cmd, o->contact_reuse);
   add_max_step_halvings_option(cmd, o->max_step_halvings);
@@ -160,6 +162,8 @@ void register_relax(CLI::App& app) {
             o->integrator = knit::integrator_name(s.params.solver.integrator);
           if (!given("--time-step")) o->time_step = s.params.solver.time_step;
           if (!given("--implicit-bending")) o->implicit_bending = s.params.solver.implicit_bending;
+          if (!given("--refuse-crossings"))
+            o->refuse_crossings = s.params.solver.refuse_crossings;
           if (!given("--contact-solve-tolerance"))
             o->contact_solve_tolerance = s.params.solver.contact_solve_tolerance;
           if (!given("--contact-reuse")) o->contact_reuse = s.params.solver.contact_reuse;
@@ -229,6 +233,7 @@ void register_relax(CLI::App& app) {
       p.solver.contact_reuse = o->contact_reuse;
       p.solver.contact_solve_tolerance = o->contact_solve_tolerance;
       p.solver.implicit_bending = o->implicit_bending;
+      p.solver.refuse_crossings = o->refuse_crossings;
       p.solver.max_step_halvings = o->max_step_halvings;
       p.discretisation.contact_points = o->contact_points;
       p.discretisation.end_mass_floor = o->end_mass_floor;

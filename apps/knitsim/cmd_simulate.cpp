@@ -17,6 +17,7 @@ void register_simulate(CLI::App& app) {
     int threads = 0;
     double duration = 0;
     bool quiet = false, overwrite = false, implicit_bending = false, check_crossings = false;
+    bool refuse_crossings = false;
     std::string export_format, integrator;
     double time_step = 0, contact_solve_tolerance = 0, contact_reuse = 0;
     int output_every = 0, max_step_halvings = 0;
@@ -47,6 +48,7 @@ void register_simulate(CLI::App& app) {
       cmd, opts->integrator,
       "the scene's (" + std::string(knit::integrator_name(solver.integrator)) + " unless it says)");
   add_implicit_bending_option(cmd, opts->implicit_bending);
+  add_refuse_crossings_option(cmd, opts->refuse_crossings);
   add_contact_solve_tolerance_option(cmd, opts->contact_solve_tolerance, "the scene's");
   add_contact_reuse_option(cmd, opts->contact_reuse, "the scene's");
   add_max_step_halvings_option(cmd, opts->max_step_halvings, "the scene's");
@@ -64,6 +66,7 @@ void register_simulate(CLI::App& app) {
     if (cmd->count("--integrator"))
       scene.model.params.solver.integrator = knit::parse_integrator(opts->integrator);
     if (opts->implicit_bending) scene.model.params.solver.implicit_bending = true;
+    if (opts->refuse_crossings) scene.model.params.solver.refuse_crossings = true;
     if (cmd->count("--contact-solve-tolerance"))
       scene.model.params.solver.contact_solve_tolerance = opts->contact_solve_tolerance;
     if (cmd->count("--contact-reuse"))

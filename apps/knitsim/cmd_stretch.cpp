@@ -95,6 +95,7 @@ void register_stretch(CLI::App& app) {
   add_time_step_option(cmd, solver.time_step);
   add_integrator_option(cmd, o->integrator);
   add_implicit_bending_option(cmd, solver.implicit_bending);
+  add_refuse_crossings_option(cmd, solver.refuse_crossings);
   add_contact_solve_tolerance_option(cmd, solver.contact_solve_tolerance);
   add_contact_reuse_option(cmd, solver.contact_reuse);
   add_max_step_halvings_option(cmd, solver.max_step_halvings);
@@ -188,13 +189,13 @@ void register_stretch(CLI::App& app) {
              cmd->count("--implicit-bending") + cmd->count("--contact-solve-tolerance") +
              cmd->count("--contact-reuse") + cmd->count("--yarn-friction") +
              cmd->count("--end-mass-floor") + cmd->count("--max-step-halvings") +
-             cmd->count("--max-force") >
+             cmd->count("--refuse-crossings") + cmd->count("--max-force") >
          0))
       throw std::invalid_argument(
           "stretch --sheet: the sheet is pulled through equilibria already; --hold, "
           "--hold-time, --hold-damped, --time-step, --integrator, --implicit-bending, "
           "--contact-solve-tolerance, --contact-reuse, --yarn-friction, --end-mass-floor, "
-          "--max-step-halvings and --max-force are for the yarn model");
+          "--max-step-halvings, --refuse-crossings and --max-force are for the yarn model");
     if ((cmd->count("--hold-time") || o->stretch.hold_damped) && !cmd->count("--hold"))
       throw std::invalid_argument("stretch: --hold-time and --hold-damped need --hold");
     o->stretch.out_dir = o->out;

@@ -118,6 +118,9 @@ void add_contact_solve_tolerance_option(CLI::App* cmd, double& tolerance,
                                         const std::string& default_text = "");
 /// --contact-reuse (SolverSettings::contact_reuse, yarn radii).
 void add_contact_reuse_option(CLI::App* cmd, double& reuse, const std::string& default_text = "");
+/// --refuse-crossings (SolverSettings::refuse_crossings), with --no-refuse-crossings where
+/// `negatable` (a resumed relaxation's own setting turned off).
+void add_refuse_crossings_option(CLI::App* cmd, bool& refuse, bool negatable = false);
 /// --max-step-halvings (SolverSettings::max_step_halvings).
 void add_max_step_halvings_option(CLI::App* cmd, int& halvings,
                                   const std::string& default_text = "");

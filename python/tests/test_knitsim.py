@@ -386,7 +386,7 @@ def keywords(function):
 # the options spelt otherwise in Python (docs/cli.md, "From Python")
 SPELT = {"round": "in_the_round", "ke-threshold": "rest", "quiet": "progress",
          "no-frames": "frames", "no-render": "render", "no-fire": "fire",
-         "no-implicit-bending": "implicit_bending"}
+         "no-implicit-bending": "implicit_bending", "no-refuse-crossings": "refuse_crossings"}
 
 
 def test_python_takes_every_option_of_the_commands():

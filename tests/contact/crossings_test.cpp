@@ -345,6 +345,49 @@ TEST(FindCrossings, AYarnShotAtAnotherIsStoppedByContactAndFliesThroughWithoutIt
   }
 }
 
+// With refuse_crossings a step in which the yarns pass through each other fails ("crossed",
+// naming the segments), leaving the state before it; step halving takes it again in
+// halves, and fails too when nothing stops the yarn (contact off: it flies through at any
+// step)
+TEST(FindCrossings, ARefusedCrossingFailsTheStepThatMadeIt) {
+  const double h = 1.0 / 11800;
+  for (const int halvings : {0, 3}) {
+    State s;
+    Model m = shot_yarn(s);
+    m.params.material.contact = false;
+    m.params.solver.refuse_crossings = true;
+    m.params.solver.time_step = h;
+    m.params.solver.max_step_halvings = halvings;
+    Simulator sim(std::move(m));
+    ASSERT_TRUE(sim.satisfy_constraints(s).converged);
+    RunOptions o;
+    o.duration = 0.05;
+    o.progress = false;
+    const RunReport r = run_simulation(sim, s, o);
+    EXPECT_EQ(r.status, StepStatus::CROSSED) << r.message;
+    EXPECT_EQ(r.summary.at("status"), "crossed");
+    EXPECT_NE(r.message.find("yarns passed through each other"), std::string::npos) << r.message;
+    EXPECT_NE(r.message.find("(yarn 0) and segment"), std::string::npos) << r.message;
+    // the run stops with b still above a, within a step of the flight's crossing time
+    EXPECT_LE(s.time, SHOT_HEIGHT / SHOT_SPEED + 1e-12);
+    EXPECT_GT(s.time, SHOT_HEIGHT / SHOT_SPEED - h);
+    EXPECT_GT(s.q[3 * (sim.model().yarns[1].cp_begin + 5) + 2], 0);
+    if (halvings > 0) {
+      EXPECT_NE(r.message.find("halv"), std::string::npos) << r.message;
+    }
+  }
+  // with contact it never fails: contact stops the yarn
+  State s;
+  Model m = shot_yarn(s);
+  m.params.solver.refuse_crossings = true;
+  Simulator sim(std::move(m));
+  ASSERT_TRUE(sim.satisfy_constraints(s).converged);
+  RunOptions o;
+  o.duration = 0.05;
+  o.progress = false;
+  EXPECT_EQ(run_simulation(sim, s, o).status, StepStatus::OK);
+}
+
 // the runner checks every step when asked (--check-crossings) and says what it found
 TEST(FindCrossings, ARunChecksEveryStepAndItsSummarySaysWhatItFound) {
   for (const bool contact : {true, false}) {

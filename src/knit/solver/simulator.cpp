@@ -16,6 +16,7 @@
 #include "knit/constraints/groups.hpp"
 #include "knit/constraints/inextensibility.hpp"
 #include "knit/contact/contact_term.hpp"
+#include "knit/contact/crossings.hpp"
 #include "knit/energy/bending.hpp"
 #include "knit/energy/global_damping.hpp"
 #include "knit/energy/gravity.hpp"
@@ -88,6 +89,8 @@ const char* status_word(StepStatus status) {
       return "interrupted";
     case StepStatus::NOT_CONVERGED:
       return "not_converged";
+    case StepStatus::CROSSED:
+      return "crossed";
   }
   return "unknown";
 }
@@ -846,6 +849,24 @@ StepResult Simulator::step(State& state, double h) {
         << " s, more than the yarn diameter (" << limit
         << " cm): the run is unstable; try a smaller time step";
     return reject(msg.str());
+  }
+  if (m_model.params.solver.refuse_crossings) {
+    ScopedTimer timer(m_data.stage_seconds["crossings"]);
+    const std::vector<SegmentCrossing> crossed = find_crossings(m_model, state.q, m_qnew);
+    if (!crossed.empty()) {
+      const SegmentCrossing& c = crossed.front();
+      std::ostringstream msg;
+      msg << "yarns passed through each other in the step to t = " << t_new << " s: segment "
+          << c.segment_a << " (yarn " << m_model.seg_yarn[c.segment_a] << ") and segment "
+          << c.segment_b << " (yarn " << m_model.seg_yarn[c.segment_b] << ") at ("
+          << c.point.x() << ", " << c.point.y() << ", " << c.point.z() << ") cm"
+          << (crossed.size() > 1 ? " and " + std::to_string(crossed.size() - 1) + " more pairs"
+                                 : std::string())
+          << "; contact did not hold: try a smaller time step or --max-step-halvings";
+      reject(msg.str());
+      res.status = StepStatus::CROSSED;
+      return res;
+    }
   }
   state.q.swap(m_qnew);
   state.v.swap(m_vnew);

@@ -36,7 +36,7 @@ class ClampGroup;
 /// stop after a step that went well.
 /// How a step or run ended. NOT_CONVERGED: a quasi-static solve (the elastic sheet's
 /// stretch test) did not reach equilibrium.
-enum class StepStatus { OK, NON_FINITE, PROJECTION_FAILED, INTERRUPTED, NOT_CONVERGED };
+enum class StepStatus { OK, NON_FINITE, PROJECTION_FAILED, INTERRUPTED, NOT_CONVERGED, CROSSED };
 
 struct StepResult {
   StepStatus status = StepStatus::OK;
@@ -46,7 +46,8 @@ struct StepResult {
 };
 
 /// The word a summary uses for a status: "ok", "unstable", "projection_failed",
-/// "interrupted".
+/// "interrupted", "not_converged", "crossed" (yarns passed through each other in a step that
+/// SolverSettings::refuse_crossings refused).
 const char* status_word(StepStatus status);
 
 class Simulator {
