@@ -2,14 +2,16 @@
 # The textiles-lab knitout programs (tests/data/knitout/) as `knitsim relax` reads them: for
 # each, whether it is laid as yarn (and at what size) or refused (and why); each laid one
 # is relaxed for MAX_TIME s of simulated time with every step checked for crossings, and
-# rendered; those of at most REST_STITCHES stitches are also relaxed to rest (FIRE, its
-# force-residual test, at most 5 s). Prints a Markdown table (docs/results.md, "Knitout
+# rendered; those of at most REST_STITCHES stitches are also relaxed to rest (FIRE with
+# imex-contact at 6e-4 s, as docs/relax.md relaxes quickly; its force-residual test; at
+# most 5 s). Prints a Markdown table (docs/results.md, "Knitout
 # programs through the knit graph"); the renders go to OUT/<program>.png.
 #
 #   scripts/knitout_programs.sh [OUT] [MAX_TIME] [REST_STITCHES]
 #                                  (default out/knitout, 0.05 s, 0: none to rest)
 #
-# Takes about 8 minutes on 2 cores (the three 80 × 123 basic-vol sheets are most of it).
+# Takes about 8 minutes on 2 cores (the three 80 × 123 basic-vol sheets are most of it),
+# 13.5 with REST_STITCHES 1300 (three FIRE runs of 5 s).
 # Needs build/knitsim.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -30,7 +32,8 @@ for prog in tests/data/knitout/*.k tests/data/knitout/*.knitout; do
     rest="$out/rest/$name"
     stitches=$(/usr/bin/python3 -c 'import json,sys; s=json.load(open(sys.argv[1])); print(s["rows"]*s["cols"])' "$run/summary.json")
     if [ "$stitches" -le "$rest_stitches" ]; then
-      "$knitsim" relax "$prog" --fire --max-time 5 --no-frames --quiet --check-crossings \
+      "$knitsim" relax "$prog" --fire --integrator imex-contact --time-step 6e-4 --max-time 5 \
+        --no-frames --quiet --check-crossings \
         --overwrite --out "$rest" >/dev/null 2>&1 || true
     fi
     /usr/bin/python3 - "$run/summary.json" "$name" "$loops" "$rest/summary.json" <<'EOF'

@@ -60,7 +60,8 @@ class SheetReader {
                "): the generator lays one yarn; several carriers, waste yarn and stripes need "
                "the knit graph's own layout, not built yet (`knitsim graph` reads the program)");
     }
-    // the cast-on: loops tucked onto empty needles before the first stitch
+    // the cast-on (not laid): loops tucked onto empty needles before the first stitch, or
+    // knit onto them in several passes (mark_knit_cast_on)
     const size_t n = g.num_loops();
     std::vector<int> row(n, -1), wale(n, -1);
     std::vector<char> cast_on(n, 0);
@@ -125,14 +126,8 @@ class SheetReader {
     std::sort(front.begin(), front.end(), by_needle);
     std::sort(back.begin(), back.end(), by_needle);
     if (piece.in_the_round) {
-      const bool fb = graph::is_front_side(first.bed);
-      for (LoopId w : front)
-        if (graph::is_front_side(g.loop(w).bed) != fb)
-          fail(g.loop(w).line, "the first round's first pass knits on both beds");
-      for (LoopId w : back)
-        if (graph::is_front_side(g.loop(w).bed) == fb)
-          fail(g.loop(w).line, "the first round's second pass knits on the bed of its first");
-      if (!fb) std::swap(front, back);
+      // (the first pass is on one bed and the second on the other: m_round_second)
+      if (!graph::is_front_side(first.bed)) std::swap(front, back);
       // around the tube: the front needles left to right, then the back ones right to left
       std::reverse(back.begin(), back.end());
     }
@@ -145,29 +140,21 @@ class SheetReader {
     int rows = 0;
     for (LoopId id = 0; id < n; ++id)
       if (!cast_on[id]) rows = std::max(rows, row[id] + 1);
-    std::vector<std::vector<LoopId>> grid(rows, std::vector<LoopId>(cols, graph::NO_LOOP));
-    std::vector<int> row_count(rows, 0);
-    for (LoopId id = 0; id < n; ++id) {
-      if (cast_on[id]) continue;
-      grid[row[id]][column[wale[id]]] = id;
-      ++row_count[row[id]];
-    }
+    // the loops of each row, in the order made (a row that is not full is refused before
+    // anything of the size rows × columns is made)
+    std::vector<std::vector<LoopId>> in_row(rows);
+    for (LoopId id = 0; id < n; ++id)
+      if (!cast_on[id]) in_row[row[id]].push_back(id);
     const int per_row = piece.in_the_round ? 2 : 1;
     int last_pass = -1, last_dir = 0;
     for (int r = 0; r < rows; ++r) {
-      if (row_count[r] != cols) {
-        // name the first loop of the row that is short
-        LoopId at = graph::NO_LOOP;
-        for (LoopId id : grid[r])
-          if (id != graph::NO_LOOP) at = at == graph::NO_LOOP ? id : std::min(at, id);
-        fail(at == graph::NO_LOOP ? 0 : g.loop(at).line,
-             "row " + std::to_string(r) + " has " + std::to_string(row_count[r]) +
+      const std::vector<LoopId>& order = in_row[r];
+      if (static_cast<int>(order.size()) != cols)
+        fail(g.loop(order.front()).line,
+             "row " + std::to_string(r) + " has " + std::to_string(order.size()) +
                  " of the piece's " + std::to_string(cols) +
                  " stitches: shaping and short rows need the knit graph's own layout, not built "
                  "yet");
-      }
-      std::vector<LoopId> order(grid[r]);
-      std::sort(order.begin(), order.end());
       std::map<int, int> passes;
       for (LoopId id : order) ++passes[g.loop(id).pass];
       if (static_cast<int>(passes.size()) != per_row)
@@ -208,12 +195,12 @@ class SheetReader {
     }
     piece.pattern.rows.assign(rows, std::string(cols, 'k'));
     for (int r = 0; r < rows; ++r)
-      for (int c = 0; c < cols; ++c) {
-        const Loop& l = g.loop(grid[r][c]);
+      for (LoopId id : in_row[r]) {
+        const Loop& l = g.loop(id);
         bool knit = l.face == graph::Face::KNIT;
         // a tube is seen from outside: the back bed's loops from behind
         if (piece.in_the_round && !graph::is_front_side(l.bed)) knit = !knit;
-        piece.pattern.rows[r][c] = knit ? 'k' : 'p';
+        piece.pattern.rows[r][column[wale[id]]] = knit ? 'k' : 'p';
       }
     // (every loop below the top row is held by the one above it: a dropped one, which
     // would ladder, leaves its column a row short, refused above)
