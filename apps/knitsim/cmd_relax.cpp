@@ -162,8 +162,7 @@ void register_relax(CLI::App& app) {
             o->integrator = knit::integrator_name(s.params.solver.integrator);
           if (!given("--time-step")) o->time_step = s.params.solver.time_step;
           if (!given("--implicit-bending")) o->implicit_bending = s.params.solver.implicit_bending;
-          if (!given("--refuse-crossings"))
-            o->refuse_crossings = s.params.solver.refuse_crossings;
+          if (!given("--refuse-crossings")) o->refuse_crossings = s.params.solver.refuse_crossings;
           if (!given("--contact-solve-tolerance"))
             o->contact_solve_tolerance = s.params.solver.contact_solve_tolerance;
           if (!given("--contact-reuse")) o->contact_reuse = s.params.solver.contact_reuse;

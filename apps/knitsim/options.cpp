@@ -288,12 +288,12 @@ void add_integrator_option(CLI::App* cmd, std::string& integrator,
 }
 
 void add_refuse_crossings_option(CLI::App* cmd, bool& refuse, bool negatable) {
-  cmd->add_flag(negatable ? "--refuse-crossings,!--no-refuse-crossings" : "--refuse-crossings",
-                refuse,
-                std::string("a step in which yarns pass through each other fails (status "
-                            "\"crossed\"); with --max-step-halvings it is taken again in "
-                            "halves. About half a step's cost more") +
-                    (negatable ? " (--no-refuse-crossings: off, where a resumed state had it)" : ""))
+  cmd->add_flag(
+         negatable ? "--refuse-crossings,!--no-refuse-crossings" : "--refuse-crossings", refuse,
+         std::string("a step in which yarns pass through each other fails (status "
+                     "\"crossed\"); with --max-step-halvings it is taken again in "
+                     "halves. About half a step's cost more") +
+             (negatable ? " (--no-refuse-crossings: off, where a resumed state had it)" : ""))
       ->group(SOLVER_GROUP);
 }
 

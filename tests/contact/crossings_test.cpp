@@ -345,63 +345,59 @@ TEST(FindCrossings, AYarnShotAtAnotherIsStoppedByContactAndFliesThroughWithoutIt
   }
 }
 
+// The shot yarn run for 0.05 s with contact on or off, crossings refused (with `halvings`)
+// or counted (check); `z_mid`: the height of b's middle at the end, and the summary's
+// test_state_time_s the time of the state the run ended with.
+RunReport run_shot(bool contact, bool refuse, int halvings, bool check, double& z_mid) {
+  State s;
+  Model m = shot_yarn(s);
+  m.params.material.contact = contact;
+  m.params.solver.refuse_crossings = refuse;
+  m.params.solver.max_step_halvings = halvings;
+  Simulator sim(std::move(m));
+  EXPECT_TRUE(sim.satisfy_constraints(s).converged);
+  RunOptions o;
+  o.duration = 0.05;
+  o.progress = false;
+  o.output_every = 50;
+  o.check_crossings = check;
+  RunReport r = run_simulation(sim, s, o);
+  z_mid = s.q[3 * (sim.model().yarns[1].cp_begin + 5) + 2];
+  r.summary["test_state_time_s"] = s.time;  // (the state it ended with)
+  return r;
+}
+
 // With refuse_crossings a step in which the yarns pass through each other fails ("crossed",
 // naming the segments), leaving the state before it; step halving takes it again in
 // halves, and fails too when nothing stops the yarn (contact off: it flies through at any
-// step)
+// step). With contact the run never fails: contact stops the yarn.
 TEST(FindCrossings, ARefusedCrossingFailsTheStepThatMadeIt) {
-  const double h = 1.0 / 11800;
+  const double h = Params{}.solver.time_step;
+  double z_mid = 0;
   for (const int halvings : {0, 3}) {
-    State s;
-    Model m = shot_yarn(s);
-    m.params.material.contact = false;
-    m.params.solver.refuse_crossings = true;
-    m.params.solver.time_step = h;
-    m.params.solver.max_step_halvings = halvings;
-    Simulator sim(std::move(m));
-    ASSERT_TRUE(sim.satisfy_constraints(s).converged);
-    RunOptions o;
-    o.duration = 0.05;
-    o.progress = false;
-    const RunReport r = run_simulation(sim, s, o);
+    const RunReport r = run_shot(false, true, halvings, false, z_mid);
     EXPECT_EQ(r.status, StepStatus::CROSSED) << r.message;
     EXPECT_EQ(r.summary.at("status"), "crossed");
     EXPECT_NE(r.message.find("yarns passed through each other"), std::string::npos) << r.message;
     EXPECT_NE(r.message.find("(yarn 0) and segment"), std::string::npos) << r.message;
     // the run stops with b still above a, within a step of the flight's crossing time
-    EXPECT_LE(s.time, SHOT_HEIGHT / SHOT_SPEED + 1e-12);
-    EXPECT_GT(s.time, SHOT_HEIGHT / SHOT_SPEED - h);
-    EXPECT_GT(s.q[3 * (sim.model().yarns[1].cp_begin + 5) + 2], 0);
+    const double t = r.summary.at("test_state_time_s").get<double>();
+    EXPECT_LE(t, SHOT_HEIGHT / SHOT_SPEED + 1e-12);
+    EXPECT_GT(t, SHOT_HEIGHT / SHOT_SPEED - h);
+    EXPECT_GT(z_mid, 0);
     if (halvings > 0) {
       EXPECT_NE(r.message.find("halv"), std::string::npos) << r.message;
     }
   }
-  // with contact it never fails: contact stops the yarn
-  State s;
-  Model m = shot_yarn(s);
-  m.params.solver.refuse_crossings = true;
-  Simulator sim(std::move(m));
-  ASSERT_TRUE(sim.satisfy_constraints(s).converged);
-  RunOptions o;
-  o.duration = 0.05;
-  o.progress = false;
-  EXPECT_EQ(run_simulation(sim, s, o).status, StepStatus::OK);
+  EXPECT_EQ(run_shot(true, true, 0, false, z_mid).status, StepStatus::OK);
+  EXPECT_GT(z_mid, 0);
 }
 
 // the runner checks every step when asked (--check-crossings) and says what it found
 TEST(FindCrossings, ARunChecksEveryStepAndItsSummarySaysWhatItFound) {
+  double z_mid = 0;
   for (const bool contact : {true, false}) {
-    State s;
-    Model m = shot_yarn(s);
-    m.params.material.contact = contact;
-    Simulator sim(std::move(m));
-    ASSERT_TRUE(sim.satisfy_constraints(s).converged);
-    RunOptions o;
-    o.duration = 0.05;
-    o.progress = false;
-    o.output_every = 50;
-    o.check_crossings = true;
-    const RunReport r = run_simulation(sim, s, o);
+    const RunReport r = run_shot(contact, false, 0, true, z_mid);
     ASSERT_EQ(r.status, StepStatus::OK) << r.message;
     const auto& c = r.summary.at("crossings");
     EXPECT_EQ(c.at("steps_checked").get<long long>(), r.steps);
@@ -415,12 +411,7 @@ TEST(FindCrossings, ARunChecksEveryStepAndItsSummarySaysWhatItFound) {
     }
   }
   // without the option, no block
-  State s;
-  Simulator sim(shot_yarn(s));
-  RunOptions o;
-  o.duration = 0.001;
-  o.progress = false;
-  EXPECT_FALSE(run_simulation(sim, s, o).summary.contains("crossings"));
+  EXPECT_FALSE(run_shot(true, false, 0, false, z_mid).summary.contains("crossings"));
 }
 
 // Knits relax without a yarn passing through another: each of the built-in patterns (flat)

@@ -858,8 +858,8 @@ StepResult Simulator::step(State& state, double h) {
       std::ostringstream msg;
       msg << "yarns passed through each other in the step to t = " << t_new << " s: segment "
           << c.segment_a << " (yarn " << m_model.seg_yarn[c.segment_a] << ") and segment "
-          << c.segment_b << " (yarn " << m_model.seg_yarn[c.segment_b] << ") at ("
-          << c.point.x() << ", " << c.point.y() << ", " << c.point.z() << ") cm"
+          << c.segment_b << " (yarn " << m_model.seg_yarn[c.segment_b] << ") at (" << c.point.x()
+          << ", " << c.point.y() << ", " << c.point.z() << ") cm"
           << (crossed.size() > 1 ? " and " + std::to_string(crossed.size() - 1) + " more pairs"
                                  : std::string())
           << "; contact did not hold: try a smaller time step or --max-step-halvings";
