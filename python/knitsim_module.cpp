@@ -710,11 +710,11 @@ PYBIND11_MODULE(knitsim, m) {
          std::optional<std::string> integrator, std::optional<bool> implicit_bending,
          std::optional<double> contact_solve_tolerance, std::optional<double> contact_reuse,
          std::optional<int> max_step_halvings, std::optional<bool> refuse_crossings,
-         std::optional<double> end_mass_floor,
-         std::optional<int> contact_points, std::optional<double> k_global,
-         std::optional<double> alpha_small, std::optional<double> alpha_large,
-         std::optional<int> check_every, std::optional<double> checkpoint_every, bool frames,
-         bool check_crossings, int threads, const std::string& export_format) {
+         std::optional<double> end_mass_floor, std::optional<int> contact_points,
+         std::optional<double> k_global, std::optional<double> alpha_small,
+         std::optional<double> alpha_large, std::optional<int> check_every,
+         std::optional<double> checkpoint_every, bool frames, bool check_crossings, int threads,
+         const std::string& export_format) {
         check_export(export_format, out);
         RelaxKnitOptions o;
         // resume: a State, or a .kstate path whose knit block gives the defaults (as
@@ -758,10 +758,9 @@ PYBIND11_MODULE(knitsim, m) {
         o.knit.cast_on = cast_on.value_or(false);
         if (shrink) o.shrink = *shrink;
         o.params = params_over(o.params, params, "relax");
-        const SolverArgs solver{time_step,        integrator,
-                                implicit_bending, contact_solve_tolerance,
-                                contact_reuse,    max_step_halvings,
-                                refuse_crossings};
+        const SolverArgs solver{
+            time_step,     integrator,        implicit_bending, contact_solve_tolerance,
+            contact_reuse, max_step_halvings, refuse_crossings};
         solver.apply(o.params);
         if (end_mass_floor) o.params.discretisation.end_mass_floor = *end_mass_floor;
         if (contact_points) o.params.discretisation.contact_points = *contact_points;
@@ -828,11 +827,10 @@ PYBIND11_MODULE(knitsim, m) {
       "integrator"_a = py::none(), "implicit_bending"_a = py::none(),
       "contact_solve_tolerance"_a = py::none(), "contact_reuse"_a = py::none(),
       "max_step_halvings"_a = py::none(), "refuse_crossings"_a = py::none(),
-      "end_mass_floor"_a = py::none(),
-      "contact_points"_a = py::none(), "k_global"_a = py::none(), "alpha_small"_a = py::none(),
-      "alpha_large"_a = py::none(), "check_every"_a = py::none(), "checkpoint_every"_a = py::none(),
-      "frames"_a = true, "check_crossings"_a = false, "threads"_a = 0, "export"_a = "",
-      relax_doc.c_str());
+      "end_mass_floor"_a = py::none(), "contact_points"_a = py::none(), "k_global"_a = py::none(),
+      "alpha_small"_a = py::none(), "alpha_large"_a = py::none(), "check_every"_a = py::none(),
+      "checkpoint_every"_a = py::none(), "frames"_a = true, "check_crossings"_a = false,
+      "threads"_a = 0, "export"_a = "", relax_doc.c_str());
 
   static const std::string relax_yarns_doc =
       "Relaxes the yarns of a .yarns, .bcc or .obj file (`knitsim relax --from PATH`): no "
@@ -852,10 +850,9 @@ PYBIND11_MODULE(knitsim, m) {
          std::optional<double> time_step, std::optional<std::string> integrator,
          std::optional<bool> implicit_bending, std::optional<double> contact_solve_tolerance,
          std::optional<double> contact_reuse, std::optional<int> max_step_halvings,
-         std::optional<bool> refuse_crossings,
-         std::optional<double> end_mass_floor, std::optional<int> contact_points,
-         const std::string& out, bool overwrite, bool progress, bool frames,
-         std::optional<double> checkpoint_every, bool check_crossings, int threads,
+         std::optional<bool> refuse_crossings, std::optional<double> end_mass_floor,
+         std::optional<int> contact_points, const std::string& out, bool overwrite, bool progress,
+         bool frames, std::optional<double> checkpoint_every, bool check_crossings, int threads,
          const std::string& export_format) {
         require_path(path, "path");
         check_export(export_format, out);
@@ -863,10 +860,9 @@ PYBIND11_MODULE(knitsim, m) {
         if (scale) o.import.scale = *scale;
         if (shrink) o.shrink = *shrink;
         o.params = params_over(o.params, params, "relax_yarns");
-        const SolverArgs solver{time_step,        integrator,
-                                implicit_bending, contact_solve_tolerance,
-                                contact_reuse,    max_step_halvings,
-                                refuse_crossings};
+        const SolverArgs solver{
+            time_step,     integrator,        implicit_bending, contact_solve_tolerance,
+            contact_reuse, max_step_halvings, refuse_crossings};
         solver.apply(o.params);
         if (end_mass_floor) o.params.discretisation.end_mass_floor = *end_mass_floor;
         if (contact_points) o.params.discretisation.contact_points = *contact_points;
@@ -893,10 +889,10 @@ PYBIND11_MODULE(knitsim, m) {
       "integrator"_a = py::none(), "implicit_bending"_a = py::none(),
       "contact_solve_tolerance"_a = py::none(), "contact_reuse"_a = py::none(),
       "max_step_halvings"_a = py::none(), "refuse_crossings"_a = py::none(),
-      "end_mass_floor"_a = py::none(),
-      "contact_points"_a = py::none(), "out"_a = "", "overwrite"_a = false, "progress"_a = false,
-      "frames"_a = true, "checkpoint_every"_a = py::none(), "check_crossings"_a = false,
-      "threads"_a = 0, "export"_a = "", relax_yarns_doc.c_str());
+      "end_mass_floor"_a = py::none(), "contact_points"_a = py::none(), "out"_a = "",
+      "overwrite"_a = false, "progress"_a = false, "frames"_a = true,
+      "checkpoint_every"_a = py::none(), "check_crossings"_a = false, "threads"_a = 0,
+      "export"_a = "", relax_yarns_doc.c_str());
 
   // ------------------------------------------------------------- files
   py::class_<StateFile>(m, "StateFile", "A .kstate file's contents.")
@@ -946,16 +942,14 @@ PYBIND11_MODULE(knitsim, m) {
              std::optional<std::string> integrator, std::optional<bool> implicit_bending,
              std::optional<double> contact_solve_tolerance, std::optional<double> contact_reuse,
              std::optional<int> max_step_halvings, std::optional<bool> refuse_crossings,
-             bool check_crossings, int threads,
-             const std::string& export_format) {
+             bool check_crossings, int threads, const std::string& export_format) {
             check_export(export_format, out);
             // the options override the scene's own for this run (as `knitsim simulate`'s);
             // `state` ends as the run's last
             Scene run = s;
-            const SolverArgs solver{time_step,        integrator,
-                                    implicit_bending, contact_solve_tolerance,
-                                    contact_reuse,    max_step_halvings,
-                                refuse_crossings};
+            const SolverArgs solver{
+                time_step,     integrator,        implicit_bending, contact_solve_tolerance,
+                contact_reuse, max_step_halvings, refuse_crossings};
             solver.apply(run.model.params);
             if (output_every) run.output_every = *output_every;
             if (duration) {
@@ -1008,8 +1002,7 @@ PYBIND11_MODULE(knitsim, m) {
           "integrator"_a = py::none(), "implicit_bending"_a = py::none(),
           "contact_solve_tolerance"_a = py::none(), "contact_reuse"_a = py::none(),
           "max_step_halvings"_a = py::none(), "refuse_crossings"_a = py::none(),
-          "check_crossings"_a = false, "threads"_a = 0,
-          "export"_a = "",
+          "check_crossings"_a = false, "threads"_a = 0, "export"_a = "",
           "Runs the scene to its duration (as `knitsim simulate`); `state` ends as the last "
           "state. Returns the report. `resume`: go on from a .kstate of an earlier run of this "
           "scene (into that run's `out`, the run goes on there). `duration` (s), "
@@ -1078,21 +1071,20 @@ PYBIND11_MODULE(knitsim, m) {
          std::optional<double> time_step, std::optional<std::string> integrator,
          std::optional<bool> implicit_bending, std::optional<double> contact_solve_tolerance,
          std::optional<double> contact_reuse, std::optional<int> max_step_halvings,
-         std::optional<bool> refuse_crossings,
-         std::optional<double> end_mass_floor, std::optional<int> contact_points,
-         std::optional<double> alpha_small, std::optional<double> alpha_large,
-         std::optional<double> yarn_friction, bool frames, bool check_crossings, int threads,
-         bool sheet, const std::vector<std::string>& fit, std::optional<double> k_course,
-         std::optional<double> k_wale, std::optional<double> k_shear, std::optional<double> k_bend,
+         std::optional<bool> refuse_crossings, std::optional<double> end_mass_floor,
+         std::optional<int> contact_points, std::optional<double> alpha_small,
+         std::optional<double> alpha_large, std::optional<double> yarn_friction, bool frames,
+         bool check_crossings, int threads, bool sheet, const std::vector<std::string>& fit,
+         std::optional<double> k_course, std::optional<double> k_wale,
+         std::optional<double> k_shear, std::optional<double> k_bend,
          std::optional<double> node_spacing) {
         StretchOptions o;
         o.resume = resume;
         o.max_force = max_force;
         o.params = params_over(o.params, params, "stretch");
-        const SolverArgs solver{time_step,        integrator,
-                                implicit_bending, contact_solve_tolerance,
-                                contact_reuse,    max_step_halvings,
-                                refuse_crossings};
+        const SolverArgs solver{
+            time_step,     integrator,        implicit_bending, contact_solve_tolerance,
+            contact_reuse, max_step_halvings, refuse_crossings};
         solver.apply(o.params);
         if (end_mass_floor) o.params.discretisation.end_mass_floor = *end_mass_floor;
         if (contact_points) o.params.discretisation.contact_points = *contact_points;
@@ -1202,10 +1194,10 @@ PYBIND11_MODULE(knitsim, m) {
       "integrator"_a = py::none(), "implicit_bending"_a = py::none(),
       "contact_solve_tolerance"_a = py::none(), "contact_reuse"_a = py::none(),
       "max_step_halvings"_a = py::none(), "refuse_crossings"_a = py::none(),
-      "end_mass_floor"_a = py::none(),
-      "contact_points"_a = py::none(), "alpha_small"_a = py::none(), "alpha_large"_a = py::none(),
-      "yarn_friction"_a = py::none(), "frames"_a = true, "check_crossings"_a = false,
-      "threads"_a = 0, "sheet"_a = false, "fit"_a = std::vector<std::string>{},
-      "k_course"_a = py::none(), "k_wale"_a = py::none(), "k_shear"_a = py::none(),
-      "k_bend"_a = py::none(), "node_spacing"_a = py::none(), stretch_doc.c_str());
+      "end_mass_floor"_a = py::none(), "contact_points"_a = py::none(),
+      "alpha_small"_a = py::none(), "alpha_large"_a = py::none(), "yarn_friction"_a = py::none(),
+      "frames"_a = true, "check_crossings"_a = false, "threads"_a = 0, "sheet"_a = false,
+      "fit"_a = std::vector<std::string>{}, "k_course"_a = py::none(), "k_wale"_a = py::none(),
+      "k_shear"_a = py::none(), "k_bend"_a = py::none(), "node_spacing"_a = py::none(),
+      stretch_doc.c_str());
 }
