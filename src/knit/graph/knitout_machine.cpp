@@ -646,8 +646,7 @@ KnitoutResult run_knitout(std::string_view text, const std::string& source_name)
   return machine.run();
 }
 
-KnitoutResult load_knitout_graph(const std::string& path) {
-  std::string text;
+std::string read_knitout_text(const std::string& path) {
   std::error_code ec;
   const auto size = std::filesystem::file_size(path, ec);
   if (!ec && size > MAX_KNITOUT_BYTES)
@@ -656,11 +655,14 @@ KnitoutResult load_knitout_graph(const std::string& path) {
         ", more than the 64 MB a knitout program may be (the limit bounds the memory its knit "
         "graph takes, about 8 times the program's size)");
   try {
-    text = knit::read_input_file(path, MAX_KNITOUT_BYTES, "knitout program");
+    return knit::read_input_file(path, MAX_KNITOUT_BYTES, "knitout program");
   } catch (const std::runtime_error& e) {
     throw std::invalid_argument(e.what());
   }
-  return run_knitout(text, path);
+}
+
+KnitoutResult load_knitout_graph(const std::string& path) {
+  return run_knitout(read_knitout_text(path), path);
 }
 
 }  // namespace knit::graph

@@ -91,8 +91,12 @@ struct KnitoutResult {
 /// std::invalid_argument on a program the machine would refuse (see above).
 KnitoutResult run_knitout(std::string_view text, const std::string& source_name);
 
-/// Reads the program at `path` (a regular file of at most MAX_KNITOUT_BYTES) and runs it;
-/// throws std::invalid_argument naming the path on a file that cannot be read or run.
+/// The text of the program at `path` (a regular file of at most MAX_KNITOUT_BYTES); throws
+/// std::invalid_argument naming the path on a file that cannot be read.
+std::string read_knitout_text(const std::string& path);
+
+/// Reads the program at `path` (read_knitout_text) and runs it; throws
+/// std::invalid_argument naming the path on a file that cannot be read or run.
 KnitoutResult load_knitout_graph(const std::string& path);
 
 }  // namespace knit::graph

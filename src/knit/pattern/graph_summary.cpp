@@ -9,7 +9,6 @@
 #include "knit/graph/chart.hpp"
 #include "knit/graph/knitout_machine.hpp"
 #include "knit/pattern/knitout.hpp"
-#include "knit/util/input_file.hpp"
 
 namespace knit {
 
@@ -131,8 +130,8 @@ nlohmann::ordered_json knitout_json(const std::string& path, const kg::KnitoutRe
 }
 
 // what `relax` lays of the program: the sheet the generator knits, or why not
-nlohmann::ordered_json sheet_json(const std::string& path, const kg::KnitoutResult& r) {
-  const std::string text = read_input_file(path, kg::MAX_KNITOUT_BYTES, "knitout program");
+nlohmann::ordered_json sheet_json(const std::string& path, const std::string& text,
+                                  const kg::KnitoutResult& r) {
   try {
     const KnitoutPiece p = knitout_sheet(r, text, path);
     return {{"laid", true},
@@ -169,9 +168,10 @@ bool is_chart_path(const std::string& path) {
 
 nlohmann::ordered_json knit_graph_json(const std::string& path, bool loops) {
   if (is_chart_path(path)) return chart_json(path, kg::load_chart_graph(path), loops);
-  const kg::KnitoutResult r = kg::load_knitout_graph(path);
+  const std::string text = kg::read_knitout_text(path);
+  const kg::KnitoutResult r = kg::run_knitout(text, path);
   nlohmann::ordered_json j = knitout_json(path, r, loops);
-  j["sheet"] = sheet_json(path, r);
+  j["sheet"] = sheet_json(path, text, r);
   return j;
 }
 

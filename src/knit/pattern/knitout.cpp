@@ -9,7 +9,6 @@
 #include <vector>
 
 #include "knit/graph/knitout_machine.hpp"
-#include "knit/util/input_file.hpp"
 
 namespace knit {
 
@@ -308,13 +307,7 @@ KnitoutPiece parse_knitout(std::string_view text, const std::string& source_name
 }
 
 KnitoutPiece load_knitout(const std::string& path) {
-  std::string text;
-  try {
-    text = read_input_file(path, graph::MAX_KNITOUT_BYTES, "knitout program");
-  } catch (const std::runtime_error& e) {
-    throw std::invalid_argument(e.what());
-  }
-  return parse_knitout(text, path);
+  return parse_knitout(graph::read_knitout_text(path), path);
 }
 
 }  // namespace knit

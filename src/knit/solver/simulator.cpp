@@ -825,9 +825,9 @@ StepResult Simulator::step(State& state, double h) {
   bool moved = false;
   for (const auto& f : m_filters) moved = f->adjust_positions(m_model, m_qnew) || moved;
   // from here a failed step is thrown away after the filters saw it: they forget it
-  auto reject = [&](std::string message) {
+  auto reject = [&](std::string message, StepStatus status = StepStatus::NON_FINITE) {
     for (auto& f : m_filters) f->reject_step();
-    res.status = StepStatus::NON_FINITE;
+    res.status = status;
     res.message = std::move(message);
     return res;
   };
@@ -863,9 +863,7 @@ StepResult Simulator::step(State& state, double h) {
           << (crossed.size() > 1 ? " and " + std::to_string(crossed.size() - 1) + " more pairs"
                                  : std::string())
           << "; contact did not hold: try a smaller time step or --max-step-halvings";
-      reject(msg.str());
-      res.status = StepStatus::CROSSED;
-      return res;
+      return reject(msg.str(), StepStatus::CROSSED);
     }
   }
   state.q.swap(m_qnew);
