@@ -81,11 +81,21 @@ class SheetReader {
         cast_on[id] = 1;
         continue;
       }
+      if (!stitched) m_edge_cast_on = edge_cast_on_loop(id, cast_on);
       stitched = true;
       if (parents.size() > 1)
         fail(l.line, "a decrease (" + std::to_string(parents.size()) +
                          " loops pulled through at once): shaping needs the knit graph's own "
                          "layout, not built yet");
+      if (!parents.empty() && parents[0] == m_edge_cast_on && cast_on[m_edge_cast_on]) {
+        // the cast-on's last loop, at the edge the first row starts from, which that row
+        // passes by: laid as the first stitch of its column's first row, the yarn turning
+        // there
+        cast_on[m_edge_cast_on] = 0;
+        row[m_edge_cast_on] = 0;
+        wale[m_edge_cast_on] = static_cast<int>(m_wales.size());
+        m_wales.push_back(m_edge_cast_on);
+      }
       if (parents.empty() || cast_on[parents[0]]) {
         // a new column: only in the first row of stitches
         if (m_first_pass < 0) m_first_pass = l.pass;
@@ -120,7 +130,8 @@ class SheetReader {
     const Loop& first = g.loop(m_wales.front());
     piece.in_the_round = m_second_pass >= 0;
     std::vector<LoopId> front, back;  // the first row's loops by side (a tube's halves)
-    for (LoopId w : m_wales) (g.loop(w).pass == first.pass ? front : back).push_back(w);
+    for (LoopId w : m_wales)
+      (g.loop(w).pass == first.pass || w == m_edge_cast_on ? front : back).push_back(w);
     auto by_needle = [&](LoopId a, LoopId b) { return g.loop(a).needle < g.loop(b).needle; };
     std::sort(front.begin(), front.end(), by_needle);
     std::sort(back.begin(), back.end(), by_needle);
@@ -155,7 +166,8 @@ class SheetReader {
                  " stitches: shaping and short rows need the knit graph's own layout, not built "
                  "yet");
       std::map<int, int> passes;
-      for (LoopId id : order) ++passes[g.loop(id).pass];
+      for (LoopId id : order)
+        if (id != m_edge_cast_on) ++passes[g.loop(id).pass];
       if (static_cast<int>(passes.size()) != per_row)
         fail(g.loop(order.front()).line,
              "row " + std::to_string(r) + " is knit in " + std::to_string(passes.size()) +
@@ -233,6 +245,20 @@ class SheetReader {
     for (LoopId id = 0; id < end; ++id) cast_on[id] = 1;
   }
 
+  // The cast-on loop a tucked cast-on's last tuck left at the edge the first row of stitches
+  // starts from, beside that row's first needle, when that row knits away from it without
+  // knitting it (a machine's alternate-bed cast-on for a rib: the yarn turns there): its
+  // column's first stitch comes a pass late, through this loop, which is laid as that
+  // column's first-row stitch. `first` is the first stitch knit. NO_LOOP when there is none.
+  LoopId edge_cast_on_loop(LoopId first, const std::vector<char>& cast_on) const {
+    if (first == 0 || !cast_on[first - 1] || !m_g.loop(first - 1).tucked) return graph::NO_LOOP;
+    const Loop &edge = m_g.loop(first - 1), &knit = m_g.loop(first);
+    const int away = knit.needle - edge.needle;
+    if (edge.yarn != knit.yarn || std::abs(away) != 1) return graph::NO_LOOP;
+    if (static_cast<int>(knit.direction) != away) return graph::NO_LOOP;
+    return first - 1;
+  }
+
   // Neighbouring columns on neighbouring needles (on a tube, along each bed): the generator
   // lays no float across empty needles. Checks loops order[k − 1] and order[k] of row `r`
   // (in the order made), naming the loop out of line with both its neighbours (a mistyped
@@ -275,6 +301,7 @@ class SheetReader {
   int m_last_line = 0;
   std::vector<LoopId> m_wales;  // the first loop of each column
   int m_first_pass = -1, m_second_pass = -1;
+  LoopId m_edge_cast_on = graph::NO_LOOP;  // see edge_cast_on_loop
   int m_first_beds = 0;  // the beds of the first pass's loops: 1 front, 2 back, 3 both
 };
 
