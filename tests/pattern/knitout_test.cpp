@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <map>
 #include <set>
 #include <string>
 
@@ -224,7 +225,13 @@ TEST(Knitout, WhatCannotBeKnitYetIsRefusedWithItsLine) {
       {head + "drop f1\ndrop f2\n", "(accepted)"},
       // what needs the knit graph's own layout
       {head + "split + f1 b1 3\n", "prog.k:5: 'split + f1 b1 3': a split"},
-      {head + "in 4\nknit - f2 4\n", "prog.k:5: 'in 4': a second yarn (carriers 3, 4)"},
+      {head + "in 4\nknit - f2 4\nknit - f1 3\n",
+       "prog.k:7: 'knit - f1 3': row 1 is knit by two yarns (carriers 4 and 3): intarsia"},
+      // stripes: carrier 3 goes on from where it stopped, at f2; not from f1
+      {head + "in 4\nknit - f2 4\nknit - f1 4\nknit - f2 3\nknit - f1 3\n", "(accepted)"},
+      {head + "in 4\nknit - f2 4\nknit - f1 4\nknit + f1 3\nknit + f2 3\n",
+       "prog.k:8: 'knit + f1 3': row 2 starts at the edge where row 0 started (both knit by "
+       "carrier 3)"},
       {head + "tuck - f2 3\n", "prog.k:5: 'tuck - f2 3': a tuck beside the loops"},
       {head + "xfer f2 b2\nrack -1\nxfer b2 f1\nrack 0\nknit - f1 3\n",
        "prog.k:9: 'knit - f1 3': a decrease (2 loops pulled through at once)"},
@@ -291,7 +298,8 @@ TEST(Knitout, TheTextilesLabProgramsOfOneYarnReadAsSheets) {
                                         "image-kp-half-rib.k",
                                         "Tutorial2_rib1x1.k",
                                         "Tutorial3_seedstitch.k",
-                                        "Tutorial3_irishmoss.k"};
+                                        "Tutorial3_irishmoss.k",
+                                        "sheet-stripes.knitout"};
   int refused = 0;
   for (const auto& entry : std::filesystem::directory_iterator(dir)) {
     const std::string name = entry.path().filename().string();
@@ -363,7 +371,85 @@ TEST(Knitout, TheTextilesLabProgramsOfOneYarnReadAsSheets) {
     ASSERT_EQ(rr.report.status, StepStatus::OK) << name << ": " << rr.report.message;
     EXPECT_EQ(rr.report.summary.at("crossings").at("count").get<long long>(), 0) << name;
   }
-  EXPECT_EQ(refused, 11);
+  EXPECT_EQ(refused, 10);
+}
+
+// Stripes: rows knit by two carriers, each going on from the edge where it stopped (so
+// carried up the edge past the other's rows, on both edges, two carries overlapping on the
+// left). The rows are laid by the yarn that knit them, the yarns apart; relaxed, no yarn
+// passes through another, each row stays where it was knit, and the fabric is the fabric of
+// the same stitches knit with one yarn: its size within 3 % of that one's.
+TEST(Knitout, StripesKeepTheirYarnsWhereTheyWereKnit) {
+  const int n = 8;
+  const std::string carriers = "ABBAAABA";  // the carrier of each row, from the bottom
+  auto program = [&](const std::string& by) {
+    std::string s = ";!knitout-2\n;;Carriers: A B\nin A\n";
+    for (int k = n; k >= 1; --k) s += "tuck - f" + std::to_string(k) + " A\n";
+    std::map<char, bool> at_left = {{'A', true}, {'B', true}};
+    bool b_in = false;
+    for (char c : by) {
+      if (c == 'B' && !b_in) s += "in B\n", b_in = true;
+      const bool right = at_left[c];
+      for (int k = 0; k < n; ++k)
+        s += std::string("knit ") + (right ? "+ f" : "- f") +
+             std::to_string(right ? k + 1 : n - k) + " " + c + "\n";
+      at_left[c] = !right;
+    }
+    return s;
+  };
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "knitsim-stripes";
+  std::filesystem::create_directories(dir);
+  const std::string striped = (dir / "stripes.k").string(), plain = (dir / "plain.k").string();
+  std::ofstream(striped) << program(carriers);
+  // one yarn, to and fro
+  std::string one;
+  for (int r = 0; r < n; ++r) one += 'A';
+  std::ofstream(plain) << program(one);
+
+  const KnitoutPiece p = load_knitout(striped);
+  ASSERT_EQ(p.rows(), n);
+  const std::vector<int> yarns = {0, 1, 1, 0, 0, 0, 1, 0};
+  EXPECT_EQ(p.pattern.row_yarn, yarns);
+  KnitOptions ko;
+  ko.rows = ko.cols = n;
+  const GeneratedKnit g = generate_knit(p.pattern, ko);
+  ASSERT_EQ(g.num_yarns(), 2);
+  EXPECT_GT(g.min_distance_ratio, 0.85);
+  // every stitch's segments are its row's yarn's
+  for (int i = 0, y = 0, end = g.yarn_segments[0]; i < g.num_segments(); ++i) {
+    if (i == end) end += g.yarn_segments[++y];
+    if (g.piece[i] == YarnPiece::STITCH) ASSERT_EQ(y, yarns[g.stitch[i].row]) << "segment " << i;
+  }
+
+  auto relax = [&](const std::string& path) {
+    RelaxKnitOptions o;
+    o.knit = ko;
+    o.run.max_time = 0.02;
+    o.run.progress = false;
+    o.run.check_crossings = true;
+    return relax_knit(path, o);
+  };
+  const RelaxResult s = relax(striped), u = relax(plain);
+  ASSERT_EQ(s.report.status, StepStatus::OK) << s.report.message;
+  ASSERT_EQ(u.report.status, StepStatus::OK) << u.report.message;
+  EXPECT_EQ(s.report.summary.at("crossings").at("count").get<long long>(), 0);
+  EXPECT_EQ(s.model.yarns.size(), 2u);
+  // each row where it was knit: the rows' mean heights in order
+  std::vector<double> y_sum(n, 0);
+  std::vector<int> y_count(n, 0);
+  for (int i = 0; i < g.num_segments(); ++i)
+    if (g.piece[i] == YarnPiece::STITCH) {
+      y_sum[g.stitch[i].row] += s.state.q[3 * (i + 3 * (i >= g.yarn_segments[0])) + 1];
+      ++y_count[g.stitch[i].row];
+    }
+  for (int r = 0; r + 1 < n; ++r)
+    EXPECT_LT(y_sum[r] / y_count[r], y_sum[r + 1] / y_count[r + 1]) << "row " << r;
+  for (const char* size : {"course_extent_cm", "wale_extent_cm"}) {
+    const double a = s.report.summary.at(size).get<double>(),
+                 b = u.report.summary.at(size).get<double>();
+    EXPECT_NEAR(a / b, 1.0, 0.03) << size << ": striped " << a << ", one yarn " << b;
+  }
+  std::filesystem::remove_all(dir);
 }
 
 TEST(Knitout, AProgramIsRelaxedAtItsOwnSize) {

@@ -4,6 +4,8 @@
 #include <cassert>
 #include <cmath>
 #include <limits>
+#include <map>
+#include <set>
 #include <stdexcept>
 #include <string>
 
@@ -211,6 +213,42 @@ class Layout {
     return p;
   }
 
+  // A yarn carried up the edge from the end of `row` to the start of `to` (> row + 1), the
+  // rows between knit by other yarns: it curls outside the edge (`reach` cm out, as a free
+  // end does) to `z_lane` behind the fabric, runs up behind the edge stitch there (quarter
+  // circles of radius rh/2 into and out of the run) and curls back into row `to`.
+  Eigen::Matrix3Xd carry_points(int row, int to, bool right, double z_lane, double reach,
+                                int n) const {
+    const Eigen::Vector3d a = edge_point(row, right), b = edge_point(to, right);
+    const double s = right ? 1.0 : -1.0, q = 0.5 * m_dims.rh;
+    std::vector<Eigen::Vector3d> pts;
+    const int n_curl = std::max(4, n / 4), n_arc = std::max(4, n / 8);
+    for (int k = 0; k <= n_curl; ++k) {
+      const double phi = PI * k / n_curl;
+      pts.emplace_back(a.x() + s * reach * std::sin(phi), a.y(),
+                       a.z() - 0.5 * (a.z() - z_lane) * (1 - std::cos(phi)));
+    }
+    for (int k = 1; k <= n_arc; ++k) {
+      const double psi = 0.5 * PI * k / n_arc;
+      pts.emplace_back(a.x() - s * q * std::sin(psi), a.y() + q * (1 - std::cos(psi)), z_lane);
+    }
+    const int n_run = std::max(2, n - 2 * n_curl - 2 * n_arc);
+    for (int k = 1; k < n_run; ++k)
+      pts.emplace_back(a.x() - s * q, a.y() + q + (b.y() - a.y() - 2 * q) * k / n_run, z_lane);
+    for (int k = 0; k < n_arc; ++k) {
+      const double psi = 0.5 * PI * k / n_arc;
+      pts.emplace_back(b.x() - s * q * std::cos(psi), b.y() - q + q * std::sin(psi), z_lane);
+    }
+    for (int k = 0; k <= n_curl; ++k) {
+      const double phi = PI * k / n_curl;
+      pts.emplace_back(b.x() + s * reach * std::sin(phi), b.y(),
+                       z_lane + 0.5 * (b.z() - z_lane) * (1 - std::cos(phi)));
+    }
+    Eigen::Matrix3Xd p(3, pts.size());
+    for (size_t k = 0; k < pts.size(); ++k) p.col(k) = pts[k];
+    return p;
+  }
+
   // a free end: from the edge point `e` (where the yarn moves along `dir_x` into the
   // fabric) it curls back outside the edge (half an ellipse in the xz plane, `reach` cm out
   // in x) to z_back behind the fabric and runs `run` cm along the back. Returned from the
@@ -316,10 +354,30 @@ Dims resolve_dims(const KnitOptions& opt) {
   return d;
 }
 
-// Lays the free ends: the start tail into pieces.front() (left empty for it) and the end
-// tail at the back. Returns the segments of each.
+// The rows one yarn knits, in order, and the direction of each (a flat piece's rows run
+// forward, in +x, or back).
+struct YarnRows {
+  std::vector<int> rows;
+  std::vector<char> forward;  // per entry of rows
+};
+
+// z behind the fabric where the free ends of `row` run: one yarn diameter (and a little)
+// behind the back of the row's legs and feet (the ends lie at the height of the sinkers,
+// beside the legs and feet; the heads are a row height away); inside a tube, not past its
+// axis.
+double z_back_of_row(const Layout& layout, const KnitOptions& opt, int row) {
+  double z = std::numeric_limits<double>::infinity();
+  for (int col = 0; col < opt.cols; ++col)
+    z = std::min({z, layout.legs(row, col), layout.foot(row, col)});
+  z -= 2.2 * opt.radius;
+  if (opt.in_the_round) z = std::max(z, -layout.tube_radius() + 2 * opt.radius);
+  return z;
+}
+
+// Lays a yarn's free ends: the start tail into pieces[start] (left empty for it) and the end
+// tail after its last piece. Returns the segments of each.
 int lay_tails(const Layout& layout, const KnitOptions& opt, const Dims& dims, double seg_len,
-              std::vector<PieceSpec>& pieces) {
+              const YarnRows& yarn, size_t start, std::vector<PieceSpec>& pieces) {
   // a flat piece's ends curl outside its edge (see tail_points); so does a tube's start,
   // where the stitch beside it, the last of the first round, lies a row height up (a
   // tube's end runs on instead, see run_on_points). Inside a narrow tube the
@@ -331,49 +389,41 @@ int lay_tails(const Layout& layout, const KnitOptions& opt, const Dims& dims, do
   const double tail_len = tail_run + PI * std::max(tail_reach, dims.depth + 1.1 * opt.radius);
   int k_tail = std::max(3, static_cast<int>(std::lround(tail_len / seg_len)));
 
-  // the free ends run one yarn diameter (and a little) behind the back of the first and last
-  // rows and curl around the edge into the first and out of the last stitch. They lie at
-  // the height of the sinkers, beside the loops' legs and feet (the heads are a row height
-  // away), so those set how far back they run; inside a tube, not past its axis.
-  auto z_back_of_row = [&](int row) {
-    double z = std::numeric_limits<double>::infinity();
-    for (int col = 0; col < opt.cols; ++col)
-      z = std::min({z, layout.legs(row, col), layout.foot(row, col)});
-    z -= 2.2 * opt.radius;
-    if (opt.in_the_round) z = std::max(z, -layout.tube_radius() + 2 * opt.radius);
-    return z;
-  };
+  // the free ends run behind the back of the first and last rows and curl around the edge
+  // into the first and out of the last stitch
   {
-    const Eigen::Vector3d e = layout.edge_point(0, false);
-    const Eigen::Matrix3Xd out =
-        layout.tail_points(e, +1.0, z_back_of_row(0), tail_reach, tail_run, 8 * k_tail);
-    pieces.front() = {out.rowwise().reverse(), k_tail, YarnPiece::TAIL, {0, 0}, {0, 0}};
+    const int row = yarn.rows.front();
+    const bool forward = yarn.forward.front();
+    const int edge = forward ? 0 : opt.cols - 1;
+    const Eigen::Vector3d e = layout.edge_point(row, !forward);
+    const Eigen::Matrix3Xd out = layout.tail_points(
+        e, forward ? 1.0 : -1.0, z_back_of_row(layout, opt, row), tail_reach, tail_run, 8 * k_tail);
+    pieces[start] = {out.rowwise().reverse(), k_tail, YarnPiece::TAIL, {row, edge}, {row, edge}};
   }
   if (opt.in_the_round) {
     // inside a tube the tail runs on a smaller circle than the loops: counted from its
     // length as laid, its segments stay about as long as the stitches' (shorter ones are
     // stiffer under the length energy and need a smaller time step)
-    Eigen::Matrix3Xd laid = pieces.front().points;
+    Eigen::Matrix3Xd laid = pieces[start].points;
     for (int j = 0; j < laid.cols(); ++j) laid.col(j) = layout.wrap(laid.col(j));
     k_tail = std::max(3, static_cast<int>(std::lround(polyline_length(laid) / seg_len)));
-    pieces.front().segments = k_tail;
+    pieces[start].segments = k_tail;
     pieces.push_back({layout.run_on_points(k_tail * seg_len, 8 * k_tail),
                       k_tail,
                       YarnPiece::TAIL,
                       {opt.rows - 1, opt.cols - 1},
                       {opt.rows - 1, opt.cols - 1}});
   } else {
-    const int last = opt.rows - 1;
-    const double z_back = z_back_of_row(last);
-    const bool forward = last % 2 == 0;
+    const int last = yarn.rows.back();
+    const bool forward = yarn.forward.back();
     const int edge = forward ? opt.cols - 1 : 0;
     const Eigen::Vector3d e = layout.edge_point(last, forward);
-    pieces.push_back(
-        {layout.tail_points(e, forward ? -1.0 : 1.0, z_back, tail_reach, tail_run, 8 * k_tail),
-         k_tail,
-         YarnPiece::TAIL,
-         {last, edge},
-         {last, edge}});
+    pieces.push_back({layout.tail_points(e, forward ? -1.0 : 1.0, z_back_of_row(layout, opt, last),
+                                         tail_reach, tail_run, 8 * k_tail),
+                      k_tail,
+                      YarnPiece::TAIL,
+                      {last, edge},
+                      {last, edge}});
   }
   return k_tail;
 }
@@ -401,6 +451,33 @@ void check_options(const Pattern& pattern, const KnitOptions& opt) {
         "knit option cast_on needs at least 2 rows (the second row is tied to the first), "
         "got rows = " +
         std::to_string(opt.rows));
+  if (!pattern.row_yarn.empty()) {
+    const int n = pattern.num_rows();
+    if (static_cast<int>(pattern.row_yarn.size()) != n ||
+        static_cast<int>(pattern.row_leftward.size()) != n)
+      throw std::invalid_argument(
+          "generate_knit: a pattern of several yarns needs the yarn and the direction of each "
+          "of its " +
+          std::to_string(n) + " rows");
+    std::vector<char> used(n, 0);
+    for (int y : pattern.row_yarn) {
+      if (y < 0 || y >= n)
+        throw std::invalid_argument("generate_knit: a row's yarn is out of range");
+      used[y] = 1;
+    }
+    if (std::find(used.begin(), used.begin() + pattern.num_yarns(), 0) !=
+        used.begin() + pattern.num_yarns())
+      throw std::invalid_argument("generate_knit: the yarns are not numbered 0, 1, … in order");
+    if (opt.in_the_round)
+      throw std::invalid_argument(
+          "knit option in_the_round: a pattern of several yarns is laid flat (stripes in the "
+          "round are not laid yet)");
+    if (opt.rows != n)
+      throw std::invalid_argument(
+          "knit option rows: a pattern of several yarns is laid at its "
+          "own " +
+          std::to_string(n) + " rows, got " + std::to_string(opt.rows));
+  }
   if (!(opt.radius > 0) || !std::isfinite(opt.radius))
     throw std::invalid_argument("knit option radius must be a positive length in cm, got " +
                                 std::to_string(opt.radius));
@@ -415,9 +492,16 @@ void check_options(const Pattern& pattern, const KnitOptions& opt) {
                                   std::to_string(value));
 }
 
-// y(p) on the generated yarn
-Eigen::Vector3d yarn_point(const Eigen::Matrix3Xd& cp, const YarnPoint& p) {
-  return cp.middleCols<4>(p.segment) * bspline_basis(p.t);
+// the first control point of each segment of yarns laid one after the other (yarn y's n_y
+// segments have n_y + 3 control points)
+std::vector<int> first_control_points(const std::vector<int>& yarn_segments) {
+  std::vector<int> first;
+  int cp = 0;
+  for (int n : yarn_segments) {
+    for (int i = 0; i < n; ++i) first.push_back(cp + i);
+    cp += n + 3;
+  }
+  return first;
 }
 
 // The two ties of the loop of `top` to the loop of `below` (the stitch under it), for the
@@ -426,7 +510,8 @@ Eigen::Vector3d yarn_point(const Eigen::Matrix3Xd& cp, const YarnPoint& p) {
 // LEG_CROSSING_HEIGHT of its height), each tie at the closest pair of yarn points there. The two
 // legs are told apart by their place along the yarn: the second tie is the closest pair at least a
 // quarter of the loop away from the first.
-std::vector<Glue> edge_ties(const Eigen::Matrix3Xd& cp, const std::vector<StitchCoord>& stitch,
+std::vector<Glue> edge_ties(const Eigen::Matrix3Xd& cp, const std::vector<int>& first_cp,
+                            const std::vector<StitchCoord>& stitch,
                             const std::vector<YarnPiece>& piece, StitchCoord top,
                             StitchCoord below) {
   constexpr int n = 16;                        // samples per segment
@@ -442,7 +527,7 @@ std::vector<Glue> edge_ties(const Eigen::Matrix3Xd& cp, const std::vector<Stitch
       if (piece[i] == YarnPiece::STITCH && stitch[i].row == s.row && stitch[i].col == s.col)
         for (int k = 0; k < n; ++k) {
           const double t = (k + 0.5) / n;
-          out.push_back({{i, t}, cp.middleCols<4>(i) * bspline_basis(t), 0});
+          out.push_back({{i, t}, cp.middleCols<4>(first_cp[i]) * bspline_basis(t), 0});
         }
     for (size_t j = 0; j < out.size(); ++j) out[j].index = static_cast<int>(j);
     return out;
@@ -505,50 +590,72 @@ YarnPoint closest_point(const Eigen::Matrix3Xd& cp, const Eigen::Vector3d& p, Al
 
 namespace {
 
-// generate_knit for a first row knit from the left
-GeneratedKnit lay_knit(const Pattern& pattern_in, const KnitOptions& opt) {
-  const Pattern pattern = tile(pattern_in, opt.rows, opt.cols);
-  const Dims dims = resolve_dims(opt);
-  const Layout layout(pattern, opt, dims);
-  const int k = opt.segments_per_stitch;
-  const int dense = 16 * k;
-
-  // segment counts of turns and tails: about as long per segment as the stitches (tails: see
-  // lay_tails)
-  const double seg_len = plain_loop_length(dims) / k;
-  const double turn_len = PI * 0.5 * dims.rh;
-  const int k_turn = std::max(2, static_cast<int>(std::lround(turn_len / seg_len)));
-  std::vector<PieceSpec> pieces;
-  pieces.push_back({});  // the start tail, made below
-  for (int row = 0; row < opt.rows; ++row) {
-    const bool forward = opt.in_the_round || row % 2 == 0;
-    for (int i = 0; i < opt.cols; ++i) {
-      const int col = forward ? i : opt.cols - 1 - i;
-      pieces.push_back({layout.stitch_points(row, col, forward, dense),
-                        k,
-                        YarnPiece::STITCH,
-                        {row, col},
-                        {row, col}});
+// The rows each yarn knits and their directions: one yarn knits every row, to and fro from
+// the left (around a tube: always forward), or the pattern's yarns (Pattern::row_yarn).
+std::vector<YarnRows> yarn_rows(const Pattern& pattern, const KnitOptions& opt) {
+  if (pattern.row_yarn.empty()) {
+    YarnRows one;
+    for (int row = 0; row < opt.rows; ++row) {
+      one.rows.push_back(row);
+      one.forward.push_back(opt.in_the_round || row % 2 == 0);
     }
-    if (!opt.in_the_round && row + 1 < opt.rows) {
-      const int edge = forward ? opt.cols - 1 : 0;
-      pieces.push_back({layout.turn_points(row, forward, 4 * k_turn),
-                        k_turn,
-                        YarnPiece::TURN,
-                        {row, edge},
-                        {row + 1, edge}});
+    return {one};
+  }
+  std::vector<YarnRows> yarns(pattern.num_yarns());
+  for (int row = 0; row < opt.rows; ++row) {
+    YarnRows& y = yarns[pattern.row_yarn[row]];
+    const bool forward = !pattern.row_leftward[row];
+    if (!y.rows.empty() && y.forward.back() == forward)
+      throw std::invalid_argument("generate_knit: yarn " + std::to_string(pattern.row_yarn[row]) +
+                                  " knits rows " + std::to_string(y.rows.back()) + " and " +
+                                  std::to_string(row) +
+                                  " in the same direction: it would float back along the row");
+    y.rows.push_back(row);
+    y.forward.push_back(forward);
+  }
+  return yarns;
+}
+
+// Carries up the edges (a yarn's consecutive rows more than one row apart): the lane of
+// each, by its yarn and the index of its first row in YarnRows::rows. Carries on one edge
+// whose rows overlap run in different lanes (lane 1, 2, …: deeper behind the fabric).
+std::map<std::pair<int, int>, int> carry_lanes(const std::vector<YarnRows>& yarns) {
+  struct Carry {
+    int from, to, yarn, index;
+  };
+  std::vector<Carry> carries[2];  // by edge: left, right
+  for (int y = 0; y < static_cast<int>(yarns.size()); ++y)
+    for (size_t j = 0; j + 1 < yarns[y].rows.size(); ++j)
+      if (yarns[y].rows[j + 1] > yarns[y].rows[j] + 1)
+        carries[yarns[y].forward[j] ? 1 : 0].push_back(
+            {yarns[y].rows[j], yarns[y].rows[j + 1], y, static_cast<int>(j)});
+  std::map<std::pair<int, int>, int> lane;
+  for (auto& edge : carries) {
+    std::sort(edge.begin(), edge.end(),
+              [](const Carry& a, const Carry& b) { return a.from < b.from; });
+    std::vector<std::pair<int, int>> placed;  // (to, lane) of the carries placed
+    for (const Carry& c : edge) {
+      std::set<int> taken;
+      for (const auto& [to, l] : placed)
+        if (to > c.from) taken.insert(l);
+      int l = 1;
+      while (taken.count(l)) ++l;
+      placed.push_back({c.to, l});
+      lane[{c.yarn, c.index}] = l;
     }
   }
-  const int k_tail = lay_tails(layout, opt, dims, seg_len, pieces);
+  return lane;
+}
 
-  // lay the pieces: each is fitted with its segments, holding the last 3 control points
+// Fits one yarn's pieces with its segments: each piece is fitted together with the first
+// segments of the next one, so its last control points (which the next piece holds fixed)
+// follow the curve ahead; only the piece's own control points are kept. Appends the
+// segments' stitches and pieces.
+Eigen::Matrix3Xd fit_pieces(const std::vector<PieceSpec>& pieces, const Layout& layout,
+                            std::vector<StitchCoord>& stitch, std::vector<YarnPiece>& kind) {
   int total_seg = 0;
   for (const auto& p : pieces) total_seg += p.segments;
-  GeneratedKnit out;
-  out.control_points.resize(3, total_seg + 3);
-  // each piece is fitted together with the first segments of the next one, so its last
-  // control points (which the next piece holds fixed) follow the curve ahead; only the
-  // piece's own control points are kept
+  Eigen::Matrix3Xd out(3, total_seg + 3);
   std::vector<Eigen::Matrix3Xd> wrapped(pieces.size());
   std::vector<Eigen::VectorXd> params(pieces.size());
   for (size_t p = 0; p < pieces.size(); ++p) {
@@ -578,46 +685,129 @@ GeneratedKnit lay_knit(const Pattern& pattern_in, const KnitOptions& opt) {
       u[n_own + j] = seg + params[p + 1][take[j]];
     }
     const Eigen::Matrix3Xd fixed =
-        ncp == 0 ? Eigen::Matrix3Xd() : Eigen::Matrix3Xd(out.control_points.middleCols(ncp - 3, 3));
+        ncp == 0 ? Eigen::Matrix3Xd() : Eigen::Matrix3Xd(out.middleCols(ncp - 3, 3));
     const Eigen::Matrix3Xd cp = fit_bspline(pts, u, seg + ahead, fixed, 1e-4);
     const int add = seg + 3 - static_cast<int>(fixed.cols());
-    out.control_points.middleCols(ncp, add) = cp.middleCols(fixed.cols(), add);
+    out.middleCols(ncp, add) = cp.middleCols(fixed.cols(), add);
     ncp += add;
     for (int s = 0; s < seg; ++s) {
-      out.stitch.push_back(2 * s < seg ? piece.first : piece.second);
-      out.piece.push_back(piece.kind);
+      stitch.push_back(2 * s < seg ? piece.first : piece.second);
+      kind.push_back(piece.kind);
     }
   }
   assert(ncp == total_seg + 3);
-  if (min_distance(out.control_points, opt.radius, CONTACT_POINTS).ratio < SEPARATION_TARGET)
-    separate_close_pairs(out.control_points, opt.radius, SEPARATION_TARGET, CONTACT_POINTS);
+  return out;
+}
 
-  // glue each free end to the closest yarn point outside its own tail and the stitch it
-  // enters
-  const int nseg = total_seg;
-  const int reach = k_tail + k / 2;
-  const Eigen::Vector3d start = out.control_points.leftCols<4>() * bspline_basis(0.0);
-  const Eigen::Vector3d end = out.control_points.rightCols<4>() * bspline_basis(1.0);
-  const YarnPoint to_start =
-      closest_point(out.control_points, start, [&](int i) { return i >= reach; });
-  const YarnPoint to_end =
-      closest_point(out.control_points, end, [&](int i) { return i < nseg - reach; });
-  out.glues.push_back({YarnPoint{0, 0.0}, to_start});
-  out.glues.push_back({YarnPoint{nseg - 1, 1.0}, to_end});
+// generate_knit for a first row knit from the left, or a pattern of several yarns
+GeneratedKnit lay_knit(const Pattern& pattern_in, const KnitOptions& opt) {
+  const Pattern pattern = tile(pattern_in, opt.rows, opt.cols);
+  const Dims dims = resolve_dims(opt);
+  const Layout layout(pattern, opt, dims);
+  const int k = opt.segments_per_stitch;
+  const int dense = 16 * k;
+
+  // segment counts of turns and tails: about as long per segment as the stitches (tails: see
+  // lay_tails)
+  const double seg_len = plain_loop_length(dims) / k;
+  const double turn_len = PI * 0.5 * dims.rh;
+  const int k_turn = std::max(2, static_cast<int>(std::lround(turn_len / seg_len)));
+  const std::vector<YarnRows> yarns = yarn_rows(pattern, opt);
+  const std::map<std::pair<int, int>, int> lanes = carry_lanes(yarns);
+  // carries run behind the free ends (z_back_of_row), lane by lane
+  double z_carry = std::numeric_limits<double>::infinity();
+  if (!lanes.empty())
+    for (int row = 0; row < opt.rows; ++row)
+      z_carry = std::min(z_carry, z_back_of_row(layout, opt, row));
+  const double lane_step = 2.5 * opt.radius, carry_reach = 0.35 * dims.w;
+
+  GeneratedKnit out;
+  std::vector<Eigen::Matrix3Xd> blocks;
+  std::vector<int> k_tails;
+  for (int y = 0; y < static_cast<int>(yarns.size()); ++y) {
+    const YarnRows& yr = yarns[y];
+    std::vector<PieceSpec> pieces;
+    pieces.push_back({});  // the start tail, made by lay_tails
+    for (size_t j = 0; j < yr.rows.size(); ++j) {
+      const int row = yr.rows[j];
+      const bool forward = yr.forward[j];
+      for (int i = 0; i < opt.cols; ++i) {
+        const int col = forward ? i : opt.cols - 1 - i;
+        pieces.push_back({layout.stitch_points(row, col, forward, dense),
+                          k,
+                          YarnPiece::STITCH,
+                          {row, col},
+                          {row, col}});
+      }
+      if (opt.in_the_round || j + 1 == yr.rows.size()) continue;
+      const int edge = forward ? opt.cols - 1 : 0, next = yr.rows[j + 1];
+      if (next == row + 1) {
+        pieces.push_back({layout.turn_points(row, forward, 4 * k_turn),
+                          k_turn,
+                          YarnPiece::TURN,
+                          {row, edge},
+                          {next, edge}});
+      } else {
+        const double z_lane = z_carry - lane_step * lanes.at({y, static_cast<int>(j)});
+        const Eigen::Matrix3Xd dense_carry =
+            layout.carry_points(row, next, forward, z_lane, carry_reach, 64);
+        const int k_carry =
+            std::max(k_turn, static_cast<int>(std::lround(polyline_length(dense_carry) / seg_len)));
+        pieces.push_back({layout.carry_points(row, next, forward, z_lane, carry_reach, 8 * k_carry),
+                          k_carry,
+                          YarnPiece::TURN,
+                          {row, edge},
+                          {next, edge}});
+      }
+    }
+    k_tails.push_back(lay_tails(layout, opt, dims, seg_len, yr, 0, pieces));
+    blocks.push_back(fit_pieces(pieces, layout, out.stitch, out.piece));
+    out.yarn_segments.push_back(static_cast<int>(blocks.back().cols()) - 3);
+  }
+  int total_cp = 0;
+  for (const auto& b : blocks) total_cp += static_cast<int>(b.cols());
+  out.control_points.resize(3, total_cp);
+  for (int y = 0, at = 0; y < static_cast<int>(blocks.size()); at += blocks[y].cols(), ++y)
+    out.control_points.middleCols(at, blocks[y].cols()) = blocks[y];
+  if (min_distance(out.control_points, opt.radius, CONTACT_POINTS, out.yarn_segments).ratio <
+      SEPARATION_TARGET)
+    separate_close_pairs(out.control_points, opt.radius, SEPARATION_TARGET, CONTACT_POINTS,
+                         out.yarn_segments);
+  const std::vector<int> first_cp = first_control_points(out.yarn_segments);
+  auto point_at = [&](const YarnPoint& p) -> Eigen::Vector3d {
+    return out.control_points.middleCols<4>(first_cp[p.segment]) * bspline_basis(p.t);
+  };
+
+  // glue each free end to the closest point of its yarn outside its own tail and the stitch
+  // it enters
+  for (int y = 0, seg0 = 0, cp0 = 0; y < static_cast<int>(blocks.size()); ++y) {
+    const int nseg = out.yarn_segments[y];
+    const Eigen::Matrix3Xd cp = out.control_points.middleCols(cp0, nseg + 3);
+    const int reach = k_tails[y] + k / 2;
+    const Eigen::Vector3d start = cp.leftCols<4>() * bspline_basis(0.0);
+    const Eigen::Vector3d end = cp.rightCols<4>() * bspline_basis(1.0);
+    YarnPoint to_start = closest_point(cp, start, [&](int i) { return i >= reach; });
+    YarnPoint to_end = closest_point(cp, end, [&](int i) { return i < nseg - reach; });
+    to_start.segment += seg0;
+    to_end.segment += seg0;
+    out.glues.push_back({YarnPoint{seg0, 0.0}, to_start});
+    out.glues.push_back({YarnPoint{seg0 + nseg - 1, 1.0}, to_end});
+    seg0 += nseg;
+    cp0 += nseg + 3;
+  }
   if (opt.bind_off)
     for (int col = 0; col < opt.cols; ++col)
-      for (const Glue& g : edge_ties(out.control_points, out.stitch, out.piece, {opt.rows - 1, col},
-                                     {opt.rows - 2, col}))
+      for (const Glue& g : edge_ties(out.control_points, first_cp, out.stitch, out.piece,
+                                     {opt.rows - 1, col}, {opt.rows - 2, col}))
         out.glues.push_back(g);
   // the cast-on: the same ties one row up from the bottom edge (the first row's heads are
   // where the second row's legs cross them); with 2 rows a bind-off has tied them already
   if (opt.cast_on && !(opt.bind_off && opt.rows == 2))
     for (int col = 0; col < opt.cols; ++col)
-      for (const Glue& g : edge_ties(out.control_points, out.stitch, out.piece, {1, col}, {0, col}))
+      for (const Glue& g :
+           edge_ties(out.control_points, first_cp, out.stitch, out.piece, {1, col}, {0, col}))
         out.glues.push_back(g);
-  for (const Glue& g : out.glues)
-    out.glue_gap_cm.push_back(
-        (yarn_point(out.control_points, g.a) - yarn_point(out.control_points, g.b)).norm());
+  for (const Glue& g : out.glues) out.glue_gap_cm.push_back((point_at(g.a) - point_at(g.b)).norm());
 
   // centre: a flat piece on the origin, a tube on its axis (y centred)
   Eigen::Vector3d centre =
@@ -632,17 +822,18 @@ GeneratedKnit lay_knit(const Pattern& pattern_in, const KnitOptions& opt) {
   const QuadratureTable quad = simpson_table(11);
   double stitch_len = 0;
   int nstitch_seg = 0;
-  for (int i = 0; i < nseg; ++i)
+  for (int i = 0; i < out.num_segments(); ++i)
     if (out.piece[i] == YarnPiece::STITCH) {
       Vector12d x;
-      for (int a = 0; a < 4; ++a) x.segment<3>(3 * a) = out.control_points.col(i + a);
+      for (int a = 0; a < 4; ++a) x.segment<3>(3 * a) = out.control_points.col(first_cp[i] + a);
       stitch_len += segment_arclength(x, quad);
       ++nstitch_seg;
     }
   out.loop_length_cm = stitch_len / nstitch_seg * k;
   out.segments_per_turn = opt.in_the_round ? 0 : k_turn;
-  out.segments_per_tail = k_tail;
-  const MinDistance md = min_distance(out.control_points, opt.radius);
+  out.segments_per_tail = k_tails.front();
+  const MinDistance md =
+      min_distance(out.control_points, opt.radius, CONTACT_POINTS, out.yarn_segments);
   out.min_distance_ratio = md.ratio;
   out.min_distance_segment_a = md.segment_a;
   out.min_distance_segment_b = md.segment_b;
@@ -653,7 +844,7 @@ GeneratedKnit lay_knit(const Pattern& pattern_in, const KnitOptions& opt) {
 
 GeneratedKnit generate_knit(const Pattern& pattern, const KnitOptions& opt) {
   check_options(pattern, opt);
-  if (!pattern.first_row_leftward) return lay_knit(pattern, opt);
+  if (!pattern.first_row_leftward || !pattern.row_yarn.empty()) return lay_knit(pattern, opt);
   // the mirror image of the mirrored chart's knit
   Pattern mirrored = tile(pattern, opt.rows, opt.cols);
   mirrored.first_row_leftward = false;
@@ -665,14 +856,25 @@ GeneratedKnit generate_knit(const Pattern& pattern, const KnitOptions& opt) {
   return g;
 }
 
+Eigen::Vector3d GeneratedKnit::point(const YarnPoint& p) const {
+  // the segment's first control point: its index plus 3 for each yarn before its own
+  int first = p.segment, local = p.segment;
+  for (size_t y = 0; y < yarn_segments.size() && local >= yarn_segments[y]; ++y) {
+    local -= yarn_segments[y];
+    first += 3;
+  }
+  return control_points.middleCols<4>(first) * bspline_basis(p.t);
+}
+
 Model build_knit_model(const GeneratedKnit& knit, const Params& params, double rest_scale,
                        double glue_close_time) {
   ModelBuilder b;
-  b.add_yarn(knit.control_points);
+  for (size_t y = 0, at = 0; y < knit.yarn_segments.size(); at += knit.yarn_segments[y] + 3, ++y)
+    b.add_yarn(knit.control_points.middleCols(at, knit.yarn_segments[y] + 3));
   b.set_stitches(knit.stitch);
   for (Glue g : knit.glues) {
     if (glue_close_time > 0) {
-      g.gap = yarn_point(knit.control_points, g.a) - yarn_point(knit.control_points, g.b);
+      g.gap = knit.point(g.a) - knit.point(g.b);
       g.close_time = glue_close_time;
     }
     b.add_glue(g);

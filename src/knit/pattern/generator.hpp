@@ -50,21 +50,27 @@ struct KnitOptions {
 /// What part of the yarn a segment belongs to.
 enum class YarnPiece {
   STITCH,  ///< the loop of one stitch (sinker to sinker)
-  TURN,    ///< the arc at the end of a row where a flat piece doubles back
+  TURN,    ///< the arc at the end of a row where a flat piece doubles back, or a yarn
+           ///< carried up the edge to its next row past other yarns' rows
   TAIL,    ///< the free start or end, looped back behind the fabric and glued (a tube's end,
            ///< which the first stitch of its last round leaves no room to loop beside, runs on
            ///< along the course across the back or front of its last round instead)
 };
 
-/// The generated yarn. Segment i is shaped by control points i … i+3.
+/// The generated yarns: one, or a pattern's several (Pattern::row_yarn). Segments are
+/// counted over all the yarns, in order; segment i of a single yarn is shaped by control
+/// points i … i+3.
 struct GeneratedKnit {
-  Eigen::Matrix3Xd control_points;  ///< one yarn (cm)
+  /// the yarns' control points one after the other (cm): yarn y's yarn_segments[y]
+  /// segments have yarn_segments[y] + 3
+  Eigen::Matrix3Xd control_points;
+  std::vector<int> yarn_segments;
   std::vector<StitchCoord> stitch;  ///< per segment; every segment has a stitch (turns
                                     ///< belong half to each row's edge stitch, tails to the
                                     ///< stitch they enter or leave)
   std::vector<YarnPiece> piece;     ///< per segment
-  std::vector<Glue> glues;          ///< each free end glued to its closest yarn point
-                                    ///< (segment indices local to this yarn); with
+  std::vector<Glue> glues;          ///< each free end glued to its yarn's closest point
+                                    ///< (yarn by yarn, two each); with
                                     ///< bind_off, then the bind-off's ties, two per stitch
                                     ///< of the last row in column order; with cast_on, then
                                     ///< the cast-on's, two per stitch of the second row
@@ -87,6 +93,9 @@ struct GeneratedKnit {
   int segments_per_tail = 0;
 
   int num_segments() const { return static_cast<int>(stitch.size()); }
+  int num_yarns() const { return static_cast<int>(yarn_segments.size()); }
+  /// y(p), p's segment counted over all the yarns
+  Eigen::Vector3d point(const YarnPoint& p) const;
 };
 
 /// Lays out `pattern` tiled to options.rows × options.cols (pattern row 0 at the bottom,

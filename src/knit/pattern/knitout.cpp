@@ -51,14 +51,6 @@ class SheetReader {
 
   KnitoutPiece read() {
     const KnitGraph& g = m_g;
-    if (g.yarns().size() > 1) {
-      std::string names;
-      for (const auto& y : g.yarns()) names += (names.empty() ? "" : ", ") + y.carrier;
-      fail(g.yarns()[1].in_line,
-           "a second yarn (carriers " + names +
-               "): the generator lays one yarn; several carriers, waste yarn and stripes need "
-               "the knit graph's own layout, not built yet (`knitsim graph` reads the program)");
-    }
     // the cast-on (not laid): loops tucked onto empty needles before the first stitch, or
     // knit onto them in several passes (mark_knit_cast_on)
     const size_t n = g.num_loops();
@@ -157,6 +149,12 @@ class SheetReader {
       if (!cast_on[id]) in_row[row[id]].push_back(id);
     const int per_row = piece.in_the_round ? 2 : 1;
     int last_pass = -1, last_dir = 0;
+    // the yarns (a graph's yarn → the piece's, in the order they first knit a row) and the
+    // last row and direction of each
+    std::map<int, int> yarn_of;
+    std::vector<std::pair<int, int>> yarn_last;  // (row, direction)
+    std::vector<int> row_yarn(rows);
+    std::vector<char> row_leftward(rows);
     for (int r = 0; r < rows; ++r) {
       const std::vector<LoopId>& order = in_row[r];
       if (static_cast<int>(order.size()) != cols)
@@ -165,6 +163,14 @@ class SheetReader {
                  " of the piece's " + std::to_string(cols) +
                  " stitches: shaping and short rows need the knit graph's own layout, not built "
                  "yet");
+      // one yarn knits the row (stripes: a yarn is carried up the edge to its next row)
+      const int yarn = g.loop(order.front()).yarn;
+      for (LoopId id : order)
+        if (g.loop(id).yarn != yarn)
+          fail(g.loop(id).line, "row " + std::to_string(r) + " is knit by two yarns (carriers " +
+                                    g.yarns()[yarn].carrier + " and " +
+                                    g.yarns()[g.loop(id).yarn].carrier +
+                                    "): intarsia needs the knit graph's own layout, not built yet");
       std::map<int, int> passes;
       for (LoopId id : order)
         if (id != m_edge_cast_on) ++passes[g.loop(id).pass];
@@ -177,6 +183,16 @@ class SheetReader {
         fail(g.loop(order.front()).line,
              "row " + std::to_string(r) + " begins before row " + std::to_string(r - 1) + " ends");
       last_pass = passes.rbegin()->first;
+      if (!yarn_of.count(yarn)) {
+        if (piece.in_the_round && !yarn_of.empty())
+          fail(g.loop(order.front()).line,
+               "round " + std::to_string(r) + " is knit by a second yarn (carrier " +
+                   g.yarns()[yarn].carrier + "): stripes in the round are not laid yet");
+        yarn_of[yarn] = static_cast<int>(yarn_last.size());
+        yarn_last.push_back({-1, 0});
+      }
+      const int py = yarn_of[yarn];
+      row_yarn[r] = py;
       // the yarn goes along the columns in order: around the tube, or to and fro, turning
       // at the edges (the first row from either edge)
       int dir = 0;
@@ -194,15 +210,26 @@ class SheetReader {
         // with both its neighbours (a mistyped needle), else at the later one.
         check_neighbours(order, k, r, piece.in_the_round);
       }
-      if (!piece.in_the_round && r > 0 && dir != 0 && dir == last_dir)
+      const auto [yarn_row, yarn_dir] = yarn_last[py];
+      if (!piece.in_the_round && yarn_row >= 0 && dir != 0 && dir == yarn_dir)
         fail(g.loop(order.front()).line,
-             "row " + std::to_string(r) + " starts at the edge where row " + std::to_string(r - 1) +
-                 " started: the yarn would float back along the row");
+             "row " + std::to_string(r) + " starts at the edge where row " +
+                 std::to_string(yarn_row) + " started" +
+                 (yarn_row == r - 1 ? std::string()
+                                    : " (both knit by carrier " + g.yarns()[yarn].carrier + ")") +
+                 ": the yarn would float back along the row");
+      yarn_last[py] = {r, dir};
+      // (a row of one stitch goes the way its carriage did)
+      row_leftward[r] = (dir != 0 ? dir : static_cast<int>(g.loop(order.front()).direction)) < 0;
       if (piece.in_the_round && r > 0 && dir != 0 && last_dir != 0 && dir != last_dir)
         fail(g.loop(order.front()).line,
              "round " + std::to_string(r) + " goes around the other way");
       if (dir != 0) last_dir = dir;
       if (r == 0) piece.pattern.first_row_leftward = dir < 0;
+    }
+    if (yarn_last.size() > 1) {
+      piece.pattern.row_yarn = row_yarn;
+      piece.pattern.row_leftward = row_leftward;
     }
     piece.pattern.rows.assign(rows, std::string(cols, 'k'));
     for (int r = 0; r < rows; ++r)

@@ -119,14 +119,24 @@ Pattern load_pattern(const std::string& name_or_path) {
   return parse_chart(text, name_or_path);
 }
 
+int Pattern::num_yarns() const {
+  return row_yarn.empty() ? 1 : 1 + *std::max_element(row_yarn.begin(), row_yarn.end());
+}
+
 Pattern tile(const Pattern& pattern, int rows, int cols) {
   if (pattern.num_rows() == 0 || pattern.num_cols() == 0)
     throw std::invalid_argument("tile: the pattern is empty");
   if (rows < 1 || cols < 1)
     throw std::invalid_argument("tile: rows and cols must be at least 1, got " +
                                 std::to_string(rows) + " x " + std::to_string(cols));
+  if (!pattern.row_yarn.empty() && rows != pattern.num_rows())
+    throw std::invalid_argument("tile: a pattern of " + std::to_string(pattern.num_yarns()) +
+                                " yarns is laid at its own " + std::to_string(pattern.num_rows()) +
+                                " rows, not " + std::to_string(rows));
   Pattern out;
   out.first_row_leftward = pattern.first_row_leftward;
+  out.row_yarn = pattern.row_yarn;
+  out.row_leftward = pattern.row_leftward;
   out.rows.assign(rows, std::string(cols, 'k'));
   for (int r = 0; r < rows; ++r)
     for (int c = 0; c < cols; ++c)

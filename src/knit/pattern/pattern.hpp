@@ -20,11 +20,20 @@ struct Pattern {
   /// mirror image of its rightward yarn, the same stitches with the yarn running the other
   /// way in every row. A chart's rows start at the left.
   bool first_row_leftward = false;
+  /// Several yarns (a knitout program's stripes): the yarn that knits each row (0, 1, …, in
+  /// the order they first knit), and whether it knits the row from the right. Empty: one
+  /// yarn knits every row, to and fro from the side first_row_leftward says. Each yarn's
+  /// rows alternate in direction; between two rows that are not neighbours it is carried up
+  /// the edge where it ended the first. A flat piece only, laid at its own size.
+  std::vector<int> row_yarn = {};
+  std::vector<char> row_leftward = {};
 
   int num_rows() const { return static_cast<int>(rows.size()); }
   int num_cols() const { return rows.empty() ? 0 : static_cast<int>(rows.front().size()); }
   /// true for a knit stitch (as seen from the front) at (row, col).
   bool is_knit(int row, int col) const { return rows[row][col] == 'k'; }
+  /// 1 + the largest row_yarn (1 when it is empty).
+  int num_yarns() const;
 };
 
 /// Parses a chart: one line per row, one character per stitch, 'k' or 'p' (either case);

@@ -4,10 +4,12 @@
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <cstdint>
 #include <limits>
 #include <map>
+#include <span>
 #include <unordered_map>
 #include <utility>
 #include <vector>
@@ -22,12 +24,33 @@ namespace {
 constexpr double SEPARATION_OVERSHOOT = 1.02;
 constexpr int SEPARATION_ITERATIONS = 200;
 
-Eigen::Matrix3Xd contact_points(const Eigen::Matrix3Xd& cp, int per) {
-  const int nseg = static_cast<int>(cp.cols()) - 3;
+// The segments of the yarns whose control points `cp` holds one after the other (yarn y's
+// n_y segments have n_y + 3 control points): segment g (counted over all yarns) of yarn
+// yarn[g] starts at control point g + 3·yarn[g]. Neighbours are segments of one yarn next
+// to each other.
+struct Segments {
+  std::vector<int> yarn;
+  Segments(const Eigen::Matrix3Xd& cp, std::span<const int> yarn_segments) {
+    if (yarn_segments.empty()) {
+      yarn.assign(std::max<Eigen::Index>(cp.cols() - 3, 0), 0);
+      return;
+    }
+    for (size_t y = 0; y < yarn_segments.size(); ++y)
+      yarn.insert(yarn.end(), yarn_segments[y], static_cast<int>(y));
+    assert(static_cast<Eigen::Index>(yarn.size() + 3 * yarn_segments.size()) == cp.cols());
+  }
+  int count() const { return static_cast<int>(yarn.size()); }
+  int first_control_point(int g) const { return g + 3 * yarn[g]; }
+  bool neighbours(int g, int h) const { return yarn[g] == yarn[h] && std::abs(g - h) <= 1; }
+};
+
+Eigen::Matrix3Xd contact_points(const Eigen::Matrix3Xd& cp, const Segments& seg, int per) {
+  const int nseg = seg.count();
   Eigen::Matrix3Xd x(3, nseg * per);
   for (int i = 0; i < nseg; ++i)
     for (int k = 0; k < per; ++k)
-      x.col(i * per + k) = cp.middleCols<4>(i) * bspline_basis((k + 0.5) / per);
+      x.col(i * per + k) =
+          cp.middleCols<4>(seg.first_control_point(i)) * bspline_basis((k + 0.5) / per);
   return x;
 }
 
@@ -78,12 +101,13 @@ class PointGrid {
 
 // The closest pair of contact points of each pair of non-neighbouring segments that comes
 // closer than `cutoff` (≤ the grid cell): (point a, point b) with a < b.
-std::vector<std::pair<int, int>> close_pairs(const Eigen::Matrix3Xd& x, int per, double cutoff) {
+std::vector<std::pair<int, int>> close_pairs(const Eigen::Matrix3Xd& x, const Segments& seg,
+                                             int per, double cutoff) {
   const PointGrid grid(x, cutoff);
   std::map<std::pair<int, int>, std::pair<double, std::pair<int, int>>> closest;
   for (int a = 0; a < x.cols(); ++a)
     grid.for_each_near(a, [&](int b) {
-      if (b <= a || b / per - a / per <= 1) return;
+      if (b <= a || seg.neighbours(a / per, b / per)) return;
       const double d2 = (x.col(a) - x.col(b)).squaredNorm();
       if (d2 >= cutoff * cutoff) return;
       const auto key = std::make_pair(a / per, b / per);
@@ -107,12 +131,14 @@ std::vector<std::pair<int, int>> close_pairs(const Eigen::Matrix3Xd& x, int per,
 // of the two segments the least that moves the points apart (Jacobi iterations, each
 // control point averaging the pushes it receives). It only ever separates, so the yarns
 // keep the sides of each other they were laid on and the loops interlock as before.
-void separate_close_pairs(Eigen::Matrix3Xd& cp, double radius, double target, int per) {
+void separate_close_pairs(Eigen::Matrix3Xd& cp, double radius, double target, int per,
+                          std::span<const int> yarn_segments) {
+  const Segments segs(cp, yarn_segments);
   const double want = target * 2 * radius;
   const int ncp = static_cast<int>(cp.cols());
   for (int it = 0; it < SEPARATION_ITERATIONS; ++it) {
-    const Eigen::Matrix3Xd x = contact_points(cp, per);
-    const auto pairs = close_pairs(x, per, want);
+    const Eigen::Matrix3Xd x = contact_points(cp, segs, per);
+    const auto pairs = close_pairs(x, segs, per, want);
     if (pairs.empty()) return;
     Eigen::Matrix3Xd push = Eigen::Matrix3Xd::Zero(3, ncp);
     Eigen::VectorXd weight = Eigen::VectorXd::Zero(ncp);
@@ -123,7 +149,7 @@ void separate_close_pairs(Eigen::Matrix3Xd& cp, double radius, double target, in
       // each side moves half the way to a little beyond the target
       const Eigen::Vector3d half = 0.5 * (SEPARATION_OVERSHOOT * want - dist) / dist * d;
       for (const auto& [point, sign] : {std::make_pair(a, 1.0), std::make_pair(b, -1.0)}) {
-        const int seg = point / per;
+        const int seg = segs.first_control_point(point / per);
         const Eigen::Vector4d w = bspline_basis((point % per + 0.5) / per);
         for (int j = 0; j < 4; ++j) {
           // the least change moving the point: w_j·δ/|w|² (weighted by w_j in the average)
@@ -137,14 +163,16 @@ void separate_close_pairs(Eigen::Matrix3Xd& cp, double radius, double target, in
   }
 }
 
-MinDistance min_distance_brute_force(const Eigen::Matrix3Xd& cp, double radius, int per) {
-  const Eigen::Matrix3Xd x = contact_points(cp, per);
+MinDistance min_distance_brute_force(const Eigen::Matrix3Xd& cp, double radius, int per,
+                                     std::span<const int> yarn_segments) {
+  const Segments segs(cp, yarn_segments);
+  const Eigen::Matrix3Xd x = contact_points(cp, segs, per);
   const int n = static_cast<int>(x.cols());
   MinDistance best;
   double best_d2 = std::numeric_limits<double>::infinity();
   for (int a = 0; a < n; ++a)
     for (int b = a + 1; b < n; ++b) {
-      if (b / per - a / per <= 1) continue;
+      if (segs.neighbours(a / per, b / per)) continue;
       const double d2 = (x.col(a) - x.col(b)).squaredNorm();
       if (d2 < best_d2) best_d2 = d2, best.segment_a = a / per, best.segment_b = b / per;
     }
@@ -152,8 +180,10 @@ MinDistance min_distance_brute_force(const Eigen::Matrix3Xd& cp, double radius, 
   return best;
 }
 
-MinDistance min_distance(const Eigen::Matrix3Xd& cp, double radius, int per) {
-  const Eigen::Matrix3Xd x = contact_points(cp, per);
+MinDistance min_distance(const Eigen::Matrix3Xd& cp, double radius, int per,
+                         std::span<const int> yarn_segments) {
+  const Segments segs(cp, yarn_segments);
+  const Eigen::Matrix3Xd x = contact_points(cp, segs, per);
   const int n = static_cast<int>(x.cols());
   const PointGrid grid(x, 3 * radius);
   struct Best {
@@ -165,7 +195,7 @@ MinDistance min_distance(const Eigen::Matrix3Xd& cp, double radius, int per) {
       [&](const tbb::blocked_range<int>& r, Best acc) {
         for (int a = r.begin(); a < r.end(); ++a)
           grid.for_each_near(a, [&](int b) {
-            if (b <= a || b / per - a / per <= 1) return;
+            if (b <= a || segs.neighbours(a / per, b / per)) return;
             const double d2 = (x.col(a) - x.col(b)).squaredNorm();
             // ties broken by index so the result does not depend on the thread count
             if (d2 < acc.d2 ||
@@ -180,7 +210,7 @@ MinDistance min_distance(const Eigen::Matrix3Xd& cp, double radius, int per) {
         return l;
       });
   if (best.a < 0 || best.d2 > grid.cell() * grid.cell())
-    return min_distance_brute_force(cp, radius, per);
+    return min_distance_brute_force(cp, radius, per, yarn_segments);
   return {std::sqrt(best.d2) / (2 * radius), best.a / per, best.b / per};
 }
 

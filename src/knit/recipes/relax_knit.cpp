@@ -165,12 +165,16 @@ State read_resumed_knit_state(const std::string& path, const std::string& patter
     }
   }
   const int expected = static_cast<int>(knit.control_points.cols());
-  if (f.yarn_cp_counts.size() != 1 || f.num_cp() != expected)
-    throw std::invalid_argument("--resume " + path + ": it holds " +
-                                std::to_string(f.yarn_cp_counts.size()) + " yarn(s) and " +
-                                std::to_string(f.num_cp()) + " control points, but " + pattern +
-                                " at this size has 1 yarn and " + std::to_string(expected) +
-                                " (give the --rows, --cols and options of the first run)");
+  bool same =
+      static_cast<int>(f.yarn_cp_counts.size()) == knit.num_yarns() && f.num_cp() == expected;
+  for (int y = 0; same && y < knit.num_yarns(); ++y)
+    same = static_cast<int>(f.yarn_cp_counts[y]) == knit.yarn_segments[y] + 3;
+  if (!same)
+    throw std::invalid_argument(
+        "--resume " + path + ": it holds " + std::to_string(f.yarn_cp_counts.size()) +
+        " yarn(s) and " + std::to_string(f.num_cp()) + " control points, but " + pattern +
+        " at this size has " + std::to_string(knit.num_yarns()) + " yarn(s) and " +
+        std::to_string(expected) + " (give the --rows, --cols and options of the first run)");
   for (size_t i = 0; i < f.stitch.size(); ++i)
     if (f.stitch[i].row != knit.stitch[i].row || f.stitch[i].col != knit.stitch[i].col)
       throw std::invalid_argument("--resume " + path + ": segment " + std::to_string(i) +
