@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "knit/io/bcc.hpp"
+#include "knit/io/obj.hpp"
 #include "knit/io/states.hpp"
 #include "knit/objects/mesh_shape.hpp"
 #include "knit/util/atomic_file.hpp"
@@ -249,29 +250,18 @@ void export_usd(const std::vector<StateFile>& frames, const std::vector<double>&
 }
 
 std::string obj_text(const StateFile& state, int per_segment) {
+  ObjWriter w("knitsim " KNIT_VERSION ": yarn centrelines as polylines, units cm");
   const auto yarns = sample_yarns(state, per_segment);
-  std::string out = "# knitsim " KNIT_VERSION ": yarn centrelines as polylines, units cm\n";
-  long long base = 1;
   for (size_t y = 0; y < yarns.size(); ++y) {
-    out += "o yarn_" + std::to_string(y) + "\n";
+    w.object("yarn_" + std::to_string(y));
     const Eigen::Matrix3Xd& p = yarns[y];
-    for (Eigen::Index k = 0; k < p.cols(); ++k) {
-      out += "v ";
-      append_float(out, p(0, k));
-      out += ' ';
-      append_float(out, p(1, k));
-      out += ' ';
-      append_float(out, p(2, k));
-      out += '\n';
-    }
+    for (Eigen::Index k = 0; k < p.cols(); ++k) w.vertex(p.col(k));
     // one two-point line element per span: Blender 3.4's OBJ importer (Debian 12's) keeps
     // only the first span of a longer `l`. Blender makes each object one chain of edges,
     // and our reader joins elements that continue one another back into one yarn.
-    for (Eigen::Index k = 0; k + 1 < p.cols(); ++k)
-      out += "l " + std::to_string(base + k) + ' ' + std::to_string(base + k + 1) + '\n';
-    base += p.cols();
+    for (Eigen::Index k = 0; k + 1 < p.cols(); ++k) w.line(k, k + 1);
   }
-  return out;
+  return w.text();
 }
 
 void export_obj(const StateFile& state, const std::string& path, int per_segment) {

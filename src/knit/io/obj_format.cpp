@@ -144,15 +144,66 @@ TriangleMesh read_obj_mesh(const std::string& path, double scale) {
   return mesh;
 }
 
+ObjWriter::ObjWriter(std::string_view header) {
+  m_out = "# ";
+  m_out += header;
+  m_out += '\n';
+}
+
+void ObjWriter::object(std::string_view name) {
+  if (!name.empty()) {
+    m_out += "o ";
+    m_out += name;
+    m_out += '\n';
+  }
+  m_vertex_base = m_vertices;
+  m_normal_base = m_normals;
+}
+
+void ObjWriter::append(const Eigen::Vector3d& p) {
+  for (int c = 0; c < 3; ++c) {
+    char buf[32];
+    const auto res = std::to_chars(buf, buf + sizeof buf, static_cast<float>(p[c]));
+    m_out += ' ';
+    m_out.append(buf, res.ptr);
+  }
+  m_out += '\n';
+}
+
+void ObjWriter::vertex(const Eigen::Vector3d& p) {
+  m_out += 'v';
+  append(p);
+  ++m_vertices;
+}
+
+void ObjWriter::normal(const Eigen::Vector3d& n) {
+  m_out += "vn";
+  append(n);
+  ++m_normals;
+}
+
+void ObjWriter::line(long long a, long long b) {
+  m_out += "l " + std::to_string(m_vertex_base + a + 1) + ' ' +
+           std::to_string(m_vertex_base + b + 1) + '\n';
+}
+
+void ObjWriter::triangle(long long a, long long b, long long c) {
+  const bool normals = m_normals > m_normal_base;
+  m_out += 'f';
+  for (long long v : {a, b, c}) {
+    const std::string i = std::to_string(m_vertex_base + v + 1);
+    m_out += ' ' + i;
+    if (normals) m_out += "//" + std::to_string(m_normal_base + v + 1);
+  }
+  m_out += '\n';
+}
+
 void write_obj_mesh(const TriangleMesh& mesh, const std::string& path) {
-  std::ostringstream out;
-  out.precision(6);
-  out << "# knitsim object surface (cm)\n";
-  for (const Eigen::Vector3d& v : mesh.vertices)
-    out << "v " << v[0] << ' ' << v[1] << ' ' << v[2] << '\n';
-  for (const Eigen::Vector3i& t : mesh.triangles)
-    out << "f " << t[0] + 1 << ' ' << t[1] + 1 << ' ' << t[2] + 1 << '\n';
-  write_file_atomic(path, out.str());
+  ObjWriter w("knitsim object surface (cm)");
+  w.object("");
+  for (const Eigen::Vector3d& v : mesh.vertices) w.vertex(v);
+  for (const Eigen::Vector3i& t : mesh.triangles) w.triangle(t[0], t[1], t[2]);
+  write_file_atomic(path, w.text());
 }
 
 }  // namespace knit

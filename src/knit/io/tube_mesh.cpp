@@ -8,6 +8,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "knit/io/obj.hpp"
 #include "knit/io/states.hpp"
 #include "knit/util/byte_reader.hpp"
 
@@ -100,45 +101,17 @@ TubeMesh tube_mesh(const StateFile& state, int per_segment, int sides) {
   return m;
 }
 
-namespace {
-
-void append_float(std::string& out, float value) {
-  char buf[32];
-  const int n = std::snprintf(buf, sizeof buf, "%.7g", static_cast<double>(value));
-  out.append(buf, static_cast<size_t>(n));
-}
-
-}  // namespace
-
 std::string obj_mesh_text(const TubeMesh& m) {
-  std::string out =
-      "# knitsim " KNIT_VERSION ": yarn tubes (triangles with normals), units cm, Z up\n";
+  ObjWriter w("knitsim " KNIT_VERSION ": yarn tubes (triangles with normals), units cm, Z up");
   for (int y = 0; y < m.num_yarns(); ++y) {
-    out += "o yarn_" + std::to_string(y) + "\n";
-    for (int v = m.vertex_begin[y]; v < m.vertex_begin[y + 1]; ++v) {
-      out += "v ";
-      for (int c = 0; c < 3; ++c) {
-        append_float(out, m.positions[v][c]);
-        out += c < 2 ? ' ' : '\n';
-      }
-    }
-    for (int v = m.vertex_begin[y]; v < m.vertex_begin[y + 1]; ++v) {
-      out += "vn ";
-      for (int c = 0; c < 3; ++c) {
-        append_float(out, m.normals[v][c]);
-        out += c < 2 ? ' ' : '\n';
-      }
-    }
-    for (int t = m.triangle_begin[y]; t < m.triangle_begin[y + 1]; ++t) {
-      out += 'f';
-      for (int c = 0; c < 3; ++c) {
-        const std::string i = std::to_string(m.triangles[t][c] + 1);
-        out += ' ' + i + "//" + i;
-      }
-      out += '\n';
-    }
+    w.object("yarn_" + std::to_string(y));
+    const int v0 = m.vertex_begin[y];
+    for (int v = v0; v < m.vertex_begin[y + 1]; ++v) w.vertex(m.positions[v].cast<double>());
+    for (int v = v0; v < m.vertex_begin[y + 1]; ++v) w.normal(m.normals[v].cast<double>());
+    for (int t = m.triangle_begin[y]; t < m.triangle_begin[y + 1]; ++t)
+      w.triangle(m.triangles[t][0] - v0, m.triangles[t][1] - v0, m.triangles[t][2] - v0);
   }
-  return out;
+  return w.text();
 }
 
 std::string ply_mesh_bytes(const TubeMesh& m) {
