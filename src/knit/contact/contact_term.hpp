@@ -1,7 +1,10 @@
 #pragma once
 // Yarn–yarn contact assembled over the whole model (MODEL.md §3 contact energy, §4 contact
 // damping, §7 culling; Kaldor, James & Marschner 2008, §4.2, §4.3 and §5.4). The pair
-// formulas, units and the damping convention are in contact_kernel.hpp.
+// formulas, units and the damping convention are in contact_kernel.hpp. The class is
+// defined in three files: contact_term.cpp (evaluation, the contact points, the records and
+// the brute-force oracle), contact_pairs.cpp (the BVH traversal and the pair kernel) and
+// contact_reuse.cpp (the linearised reuse and the operator stiffness).
 //
 // Pairs: every pair of segments that are not Model::neighbours (same yarn, |i − j| ≤ 1);
 // across yarns every pair. Each pair is evaluated once (i < j).
