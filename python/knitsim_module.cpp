@@ -226,23 +226,36 @@ Integrator integrator_arg(const std::string& name) {
 
 // The solver options that simulate, relax and stretch share (docs/cli.md, "Solver
 // options"); each unset one leaves the parameters as they are.
-struct SolverArgs {
-  std::optional<double> time_step;
-  std::optional<std::string> integrator;
-  std::optional<bool> implicit_bending;
-  std::optional<double> contact_solve_tolerance, contact_reuse;
-  std::optional<int> max_step_halvings;
-  std::optional<bool> refuse_crossings;
-  void apply(Params& p) const {
-    if (time_step) p.solver.time_step = *time_step;
-    if (integrator) p.solver.integrator = integrator_arg(*integrator);
-    if (implicit_bending) p.solver.implicit_bending = *implicit_bending;
-    if (contact_solve_tolerance) p.solver.contact_solve_tolerance = *contact_solve_tolerance;
-    if (contact_reuse) p.solver.contact_reuse = *contact_reuse;
-    if (max_step_halvings) p.solver.max_step_halvings = *max_step_halvings;
-    if (refuse_crossings) p.solver.refuse_crossings = *refuse_crossings;
+// The model's parameters given as keywords — any name of the parameter table
+// (src/knit/model/params.def, docs/parameters.md, knitsim.parameters()), as `params` takes
+// them — laid over the `params` dict (a keyword wins): one dict for params_over. A keyword
+// that is neither an argument nor a parameter is a TypeError naming it; with `only_group`,
+// one of another group is refused. `given` receives the names given either way.
+py::object params_and_keywords(const py::object& params, const py::kwargs& kw, const char* where,
+                               std::set<std::string>* given = nullptr,
+                               const char* only_group = nullptr) {
+  py::dict merged;
+  if (py::isinstance<py::dict>(params))
+    merged = params.cast<py::dict>().attr("copy")();
+  else if (!params.is_none())
+    return params;  // (params_over names what is wrong with it)
+  for (auto item : kw) {
+    const std::string key = item.first.cast<std::string>();
+    const auto& table = param_table();
+    if (std::none_of(table.begin(), table.end(), [&](const ParamDecl& d) { return key == d.name; }))
+      throw py::type_error(std::string(where) + "() got an unexpected keyword argument '" + key +
+                           "': neither one of its arguments nor a parameter of the model "
+                           "(docs/parameters.md)");
+    if (only_group && param_decl(key).group != std::string(only_group))
+      throw std::invalid_argument(std::string(where) + ": " + key + " is a " +
+                                  param_decl(key).group + " parameter; only the " + only_group +
+                                  "'s change for a run (set the others in the scene)");
+    merged[py::str(key)] = item.second;
   }
-};
+  if (given)
+    for (auto item : merged) given->insert(item.first.cast<std::string>());
+  return merged.empty() ? params : py::object(merged);
+}
 
 // --threads for the length of a call (0: as set_threads left it)
 std::unique_ptr<tbb::global_control> thread_limit(int threads) {
@@ -650,11 +663,13 @@ PYBIND11_MODULE(knitsim, m) {
   const RelaxKnitOptions relax_options;
   const RelaxOptions relax_run;
   static const std::string solver_doc =
-      "The solver's options (docs/cli.md, \"Solver options\"), as the command's: `time_step` "
-      "(s), `integrator` (\"explicit\", \"imex\" or \"imex-contact\"), `implicit_bending`, "
-      "`contact_solve_tolerance` (fraction), `contact_reuse` (yarn radii), "
-      "`max_step_halvings`; `threads` (0: as set_threads left it). Each applies over "
-      "`params`, a dict of scene parameters (docs/scene-format.md).";
+      "Every parameter of the model (docs/parameters.md: its name, unit and range) is also a "
+      "keyword, as in `params` (a dict of them, docs/scene-format.md; a parameter given both "
+      "ways is refused): the solver's `time_step` (s), `integrator` (\"explicit\", \"imex\" "
+      "or \"imex-contact\"), `implicit_bending`, `contact_solve_tolerance` (fraction), "
+      "`contact_reuse` (yarn radii), `max_step_halvings`, `refuse_crossings`, the damping's "
+      "`k_global`, `alpha_small`, `alpha_large`, `yarn_friction`, `end_mass_floor`, "
+      "`contact_points`, …; `threads` (0: as set_threads left it).";
   static const std::string relax_doc =
       "Generates `pattern` (stockinette, garter, rib2x2, seed, … a chart file or a knitout "
       "program) at rows × cols (default " +
@@ -698,6 +713,28 @@ PYBIND11_MODULE(knitsim, m) {
       "`check_crossings`: check every step for yarns that passed through each other (the "
       "summary's `crossings`, as --check-crossings). Returns a Knit.";
   m.def(
+      "parameters",
+      [] {
+        py::list out;
+        const Params defaults;
+        for (const ParamDecl& d : param_table()) {
+          py::dict p("name"_a = d.name, "group"_a = d.group, "unit"_a = d.unit, "doc"_a = d.doc,
+                     "default"_a = to_python(param_json(d, defaults)));
+          if (d.type == ParamType::REAL || d.type == ParamType::INTEGER) {
+            p["min"] = d.min;
+            p["max"] = d.max;
+          }
+          if (d.type == ParamType::CHOICE) p["choices"] = d.choices();
+          out.append(p);
+        }
+        return out;
+      },
+      "The model's parameters (src/knit/model/params.def; docs/parameters.md), each a dict: "
+      "name, group (material, discretisation or solver), unit, doc, default, and the working "
+      "range min and max (numbers) or the choices. Each is a keyword of relax(), "
+      "relax_yarns() and stretch() (Scene.run(): the solver's), and a key of their `params`.");
+
+  m.def(
       "relax",
       [](std::string pattern, std::optional<int> rows, std::optional<int> cols,
          std::optional<bool> in_the_round, double max_time, std::optional<double> rest,
@@ -706,15 +743,9 @@ PYBIND11_MODULE(knitsim, m) {
          bool overwrite, bool progress, const py::object& resume, std::optional<bool> fire,
          std::optional<double> residual, std::optional<bool> bind_off, std::optional<bool> cast_on,
          std::optional<double> contact_reuse_widen,
-         std::optional<double> contact_reuse_widen_residual, std::optional<double> time_step,
-         std::optional<std::string> integrator, std::optional<bool> implicit_bending,
-         std::optional<double> contact_solve_tolerance, std::optional<double> contact_reuse,
-         std::optional<int> max_step_halvings, std::optional<bool> refuse_crossings,
-         std::optional<double> end_mass_floor, std::optional<int> contact_points,
-         std::optional<double> k_global, std::optional<double> alpha_small,
-         std::optional<double> alpha_large, std::optional<int> check_every,
+         std::optional<double> contact_reuse_widen_residual, std::optional<int> check_every,
          std::optional<double> checkpoint_every, bool frames, bool check_crossings, int threads,
-         const std::string& export_format) {
+         const std::string& export_format, const py::kwargs& kw) {
         check_export(export_format, out);
         RelaxKnitOptions o;
         // resume: a State, or a .kstate path whose knit block gives the defaults (as
@@ -757,25 +788,12 @@ PYBIND11_MODULE(knitsim, m) {
         o.knit.bind_off = bind_off.value_or(false);
         o.knit.cast_on = cast_on.value_or(false);
         if (shrink) o.shrink = *shrink;
-        o.params = params_over(o.params, params, "relax");
-        const SolverArgs solver{
-            time_step,     integrator,        implicit_bending, contact_solve_tolerance,
-            contact_reuse, max_step_halvings, refuse_crossings};
-        solver.apply(o.params);
-        if (end_mass_floor) o.params.discretisation.end_mass_floor = *end_mass_floor;
-        if (contact_points) o.params.discretisation.contact_points = *contact_points;
-        if (k_global) o.params.material.k_global = *k_global;
-        if (alpha_small) o.params.material.alpha_small = *alpha_small;
-        if (alpha_large) o.params.material.alpha_large = *alpha_large;
+        std::set<std::string> given;
+        o.params = params_over(o.params, params_and_keywords(params, kw, "relax", &given), "relax");
         if (resume_file && resume_file->knit && resume_file->knit->relaxation) {
           // the file's contact reuse goes with its integrator when another is asked for,
           // and its widening with the reuse (as `knitsim relax --resume`)
-          const bool named = py::isinstance<py::dict>(params);
-          auto in_params = [&](const char* key) {
-            return named && params.cast<py::dict>().contains(key);
-          };
-          if ((in_params("integrator") || integrator) &&
-              !(in_params("contact_reuse") || contact_reuse) &&
+          if (given.count("integrator") && !given.count("contact_reuse") &&
               o.params.solver.integrator != Integrator::IMEX_CONTACT)
             o.params.solver.contact_reuse = 0;
           if (o.params.solver.contact_reuse == 0 && !contact_reuse_widen)
@@ -790,15 +808,11 @@ PYBIND11_MODULE(knitsim, m) {
         if (check_every) o.run.check_every = *check_every;
         if (checkpoint_every) o.run.checkpoint_every_s = *checkpoint_every;
         if (fire) o.fire = *fire;
-        if (o.fire) {
-          const char* damping = k_global      ? "k_global"
-                                : alpha_small ? "alpha_small"
-                                : alpha_large ? "alpha_large"
-                                              : nullptr;
-          if (damping)
-            throw std::invalid_argument(std::string(damping) +
-                                        ": a FIRE relaxation (fire=True) has no damping to set");
-        }
+        if (o.fire)
+          for (const char* damping : {"k_global", "alpha_small", "alpha_large"})
+            if (given.count(damping))
+              throw std::invalid_argument(std::string(damping) +
+                                          ": a FIRE relaxation (fire=True) has no damping to set");
         o.run.out_dir = out;
         o.run.overwrite = overwrite;
         o.run.progress = progress;
@@ -823,12 +837,7 @@ PYBIND11_MODULE(knitsim, m) {
       "out"_a = "", "overwrite"_a = false, "progress"_a = false, "resume"_a = py::none(),
       "fire"_a = py::none(), "residual"_a = py::none(), "bind_off"_a = py::none(),
       "cast_on"_a = py::none(), "contact_reuse_widen"_a = py::none(),
-      "contact_reuse_widen_residual"_a = py::none(), "time_step"_a = py::none(),
-      "integrator"_a = py::none(), "implicit_bending"_a = py::none(),
-      "contact_solve_tolerance"_a = py::none(), "contact_reuse"_a = py::none(),
-      "max_step_halvings"_a = py::none(), "refuse_crossings"_a = py::none(),
-      "end_mass_floor"_a = py::none(), "contact_points"_a = py::none(), "k_global"_a = py::none(),
-      "alpha_small"_a = py::none(), "alpha_large"_a = py::none(), "check_every"_a = py::none(),
+      "contact_reuse_widen_residual"_a = py::none(), "check_every"_a = py::none(),
       "checkpoint_every"_a = py::none(), "frames"_a = true, "check_crossings"_a = false,
       "threads"_a = 0, "export"_a = "", relax_doc.c_str());
 
@@ -846,27 +855,17 @@ PYBIND11_MODULE(knitsim, m) {
       "relax_yarns",
       [](const std::string& path, std::optional<double> scale, std::optional<double> shrink,
          double max_time, std::optional<double> rest, std::optional<double> residual,
-         std::optional<int> check_every, std::optional<double> k_global, const py::object& params,
-         std::optional<double> time_step, std::optional<std::string> integrator,
-         std::optional<bool> implicit_bending, std::optional<double> contact_solve_tolerance,
-         std::optional<double> contact_reuse, std::optional<int> max_step_halvings,
-         std::optional<bool> refuse_crossings, std::optional<double> end_mass_floor,
-         std::optional<int> contact_points, const std::string& out, bool overwrite, bool progress,
-         bool frames, std::optional<double> checkpoint_every, bool check_crossings, int threads,
-         const std::string& export_format) {
+         std::optional<int> check_every, const py::object& params, const std::string& out,
+         bool overwrite, bool progress, bool frames, std::optional<double> checkpoint_every,
+         bool check_crossings, int threads, const std::string& export_format,
+         const py::kwargs& kw) {
         require_path(path, "path");
         check_export(export_format, out);
         RelaxYarnsOptions o;
         if (scale) o.import.scale = *scale;
         if (shrink) o.shrink = *shrink;
-        o.params = params_over(o.params, params, "relax_yarns");
-        const SolverArgs solver{
-            time_step,     integrator,        implicit_bending, contact_solve_tolerance,
-            contact_reuse, max_step_halvings, refuse_crossings};
-        solver.apply(o.params);
-        if (end_mass_floor) o.params.discretisation.end_mass_floor = *end_mass_floor;
-        if (contact_points) o.params.discretisation.contact_points = *contact_points;
-        if (k_global) o.params.material.k_global = *k_global;
+        o.params =
+            params_over(o.params, params_and_keywords(params, kw, "relax_yarns"), "relax_yarns");
         o.run.max_time = max_time;
         if (rest) o.run.ke_per_length = *rest;
         if (residual) o.run.force_residual = *residual;
@@ -885,14 +884,9 @@ PYBIND11_MODULE(knitsim, m) {
       },
       "path"_a, "scale"_a = py::none(), "shrink"_a = py::none(), "max_time"_a = relax_run.max_time,
       "rest"_a = py::none(), "residual"_a = py::none(), "check_every"_a = py::none(),
-      "k_global"_a = py::none(), "params"_a = py::none(), "time_step"_a = py::none(),
-      "integrator"_a = py::none(), "implicit_bending"_a = py::none(),
-      "contact_solve_tolerance"_a = py::none(), "contact_reuse"_a = py::none(),
-      "max_step_halvings"_a = py::none(), "refuse_crossings"_a = py::none(),
-      "end_mass_floor"_a = py::none(), "contact_points"_a = py::none(), "out"_a = "",
-      "overwrite"_a = false, "progress"_a = false, "frames"_a = true,
-      "checkpoint_every"_a = py::none(), "check_crossings"_a = false, "threads"_a = 0,
-      "export"_a = "", relax_yarns_doc.c_str());
+      "params"_a = py::none(), "out"_a = "", "overwrite"_a = false, "progress"_a = false,
+      "frames"_a = true, "checkpoint_every"_a = py::none(), "check_crossings"_a = false,
+      "threads"_a = 0, "export"_a = "", relax_yarns_doc.c_str());
 
   // ------------------------------------------------------------- files
   py::class_<StateFile>(m, "StateFile", "A .kstate file's contents.")
@@ -938,19 +932,15 @@ PYBIND11_MODULE(knitsim, m) {
           "run",
           [](Scene& s, const std::string& out, bool overwrite, bool progress,
              const py::object& resume, std::optional<double> duration,
-             std::optional<int> output_every, std::optional<double> time_step,
-             std::optional<std::string> integrator, std::optional<bool> implicit_bending,
-             std::optional<double> contact_solve_tolerance, std::optional<double> contact_reuse,
-             std::optional<int> max_step_halvings, std::optional<bool> refuse_crossings,
-             bool check_crossings, int threads, const std::string& export_format) {
+             std::optional<int> output_every, bool check_crossings, int threads,
+             const std::string& export_format, const py::kwargs& kw) {
             check_export(export_format, out);
             // the options override the scene's own for this run (as `knitsim simulate`'s);
             // `state` ends as the run's last
             Scene run = s;
-            const SolverArgs solver{
-                time_step,     integrator,        implicit_bending, contact_solve_tolerance,
-                contact_reuse, max_step_halvings, refuse_crossings};
-            solver.apply(run.model.params);
+            run.model.params =
+                params_over(run.model.params,
+                            params_and_keywords(py::none(), kw, "run", nullptr, "solver"), "run");
             if (output_every) run.output_every = *output_every;
             if (duration) {
               try {
@@ -998,17 +988,15 @@ PYBIND11_MODULE(knitsim, m) {
             return report;
           },
           "out"_a = "", "overwrite"_a = false, "progress"_a = false, "resume"_a = py::none(),
-          "duration"_a = py::none(), "output_every"_a = py::none(), "time_step"_a = py::none(),
-          "integrator"_a = py::none(), "implicit_bending"_a = py::none(),
-          "contact_solve_tolerance"_a = py::none(), "contact_reuse"_a = py::none(),
-          "max_step_halvings"_a = py::none(), "refuse_crossings"_a = py::none(),
-          "check_crossings"_a = false, "threads"_a = 0, "export"_a = "",
+          "duration"_a = py::none(), "output_every"_a = py::none(), "check_crossings"_a = false,
+          "threads"_a = 0, "export"_a = "",
           "Runs the scene to its duration (as `knitsim simulate`); `state` ends as the last "
           "state. Returns the report. `resume`: go on from a .kstate of an earlier run of this "
           "scene (into that run's `out`, the run goes on there). `duration` (s), "
-          "`output_every` (steps) and the solver's options (`time_step`, `integrator`, "
-          "`implicit_bending`, `contact_solve_tolerance`, `contact_reuse`, "
-          "`max_step_halvings`; docs/cli.md) override the scene's own for this run; "
+          "`output_every` (steps) and the solver's parameters as keywords (`time_step`, "
+          "`integrator`, `implicit_bending`, `contact_solve_tolerance`, `contact_reuse`, "
+          "`max_step_halvings`, `refuse_crossings`, …: the solver's group of "
+          "docs/parameters.md) override the scene's own for this run; "
           "`threads` (0: as set_threads left it); `export`: also export the run in `out` "
           "(usd: every state as frames.usda; obj, bcc, ply, …: the final state), as "
           "`knitsim simulate --export`.");
@@ -1067,30 +1055,17 @@ PYBIND11_MODULE(knitsim, m) {
       [](const std::string& kstate, const std::string& direction, double to, double speed,
          int cycles, int clamp_stitches, double output_strain, double hold, double hold_time,
          bool hold_damped, const py::object& params, const std::string& out, bool overwrite,
-         bool render, bool progress, const std::string& resume, double max_force,
-         std::optional<double> time_step, std::optional<std::string> integrator,
-         std::optional<bool> implicit_bending, std::optional<double> contact_solve_tolerance,
-         std::optional<double> contact_reuse, std::optional<int> max_step_halvings,
-         std::optional<bool> refuse_crossings, std::optional<double> end_mass_floor,
-         std::optional<int> contact_points, std::optional<double> alpha_small,
-         std::optional<double> alpha_large, std::optional<double> yarn_friction, bool frames,
+         bool render, bool progress, const std::string& resume, double max_force, bool frames,
          bool check_crossings, int threads, bool sheet, const std::vector<std::string>& fit,
          std::optional<double> k_course, std::optional<double> k_wale,
          std::optional<double> k_shear, std::optional<double> k_bend,
-         std::optional<double> node_spacing) {
+         std::optional<double> node_spacing, const py::kwargs& kw) {
         StretchOptions o;
         o.resume = resume;
         o.max_force = max_force;
-        o.params = params_over(o.params, params, "stretch");
-        const SolverArgs solver{
-            time_step,     integrator,        implicit_bending, contact_solve_tolerance,
-            contact_reuse, max_step_halvings, refuse_crossings};
-        solver.apply(o.params);
-        if (end_mass_floor) o.params.discretisation.end_mass_floor = *end_mass_floor;
-        if (contact_points) o.params.discretisation.contact_points = *contact_points;
-        if (alpha_small) o.params.material.alpha_small = *alpha_small;
-        if (alpha_large) o.params.material.alpha_large = *alpha_large;
-        if (yarn_friction) o.params.material.yarn_friction = *yarn_friction;
+        o.params = params_over(o.params, params_and_keywords(params, kw, "stretch"), "stretch");
+        std::set<std::string> keywords;  // the parameters given as keywords
+        for (auto item : kw) keywords.insert(item.first.cast<std::string>());
         o.hold_strain = hold;
         o.hold_time = hold_time;
         o.hold_damped = hold_damped;
@@ -1122,15 +1097,9 @@ PYBIND11_MODULE(knitsim, m) {
           note(hold > 0, "hold");
           note(hold_damped, "hold_damped");
           note(max_force > 0, "max_force");
-          note(time_step.has_value(), "time_step");
-          note(integrator.has_value(), "integrator");
-          note(implicit_bending.has_value(), "implicit_bending");
-          note(contact_solve_tolerance.has_value(), "contact_solve_tolerance");
-          note(contact_reuse.has_value(), "contact_reuse");
-          note(max_step_halvings.has_value(), "max_step_halvings");
-          note(refuse_crossings.has_value(), "refuse_crossings");
-          note(end_mass_floor.has_value(), "end_mass_floor");
-          note(yarn_friction.has_value(), "yarn_friction");
+          // the yarn model's parameters given as keywords (a params dict is the yarn model's
+          // too, but the sheet stretch reads its radius from it, as the command does)
+          for (const std::string& k : keywords) note(true, k.c_str());
           note(!resume.empty(), "resume");
           if (!yarn_only.empty())
             throw std::invalid_argument(
@@ -1190,14 +1159,8 @@ PYBIND11_MODULE(knitsim, m) {
       "hold_time"_a = stretch_options.hold_time, "hold_damped"_a = stretch_options.hold_damped,
       "params"_a = py::none(), "out"_a = "", "overwrite"_a = false,
       "render"_a = stretch_options.render, "progress"_a = false, "resume"_a = "",
-      "max_force"_a = stretch_options.max_force, "time_step"_a = py::none(),
-      "integrator"_a = py::none(), "implicit_bending"_a = py::none(),
-      "contact_solve_tolerance"_a = py::none(), "contact_reuse"_a = py::none(),
-      "max_step_halvings"_a = py::none(), "refuse_crossings"_a = py::none(),
-      "end_mass_floor"_a = py::none(), "contact_points"_a = py::none(),
-      "alpha_small"_a = py::none(), "alpha_large"_a = py::none(), "yarn_friction"_a = py::none(),
-      "frames"_a = true, "check_crossings"_a = false, "threads"_a = 0, "sheet"_a = false,
-      "fit"_a = std::vector<std::string>{}, "k_course"_a = py::none(), "k_wale"_a = py::none(),
-      "k_shear"_a = py::none(), "k_bend"_a = py::none(), "node_spacing"_a = py::none(),
-      stretch_doc.c_str());
+      "max_force"_a = stretch_options.max_force, "frames"_a = true, "check_crossings"_a = false,
+      "threads"_a = 0, "sheet"_a = false, "fit"_a = std::vector<std::string>{},
+      "k_course"_a = py::none(), "k_wale"_a = py::none(), "k_shear"_a = py::none(),
+      "k_bend"_a = py::none(), "node_spacing"_a = py::none(), stretch_doc.c_str());
 }

@@ -378,6 +378,13 @@ def cli_options(command):
     return names
 
 
+PARAMETERS = {p["name"] for p in knitsim.parameters()}
+
+
+def signature(function):
+    return function.__doc__.splitlines()[0]
+
+
 def keywords(function):
     """The keyword arguments of a module function, from its signature line."""
     return set(re.findall(r"(\w+): ", function.__doc__.splitlines()[0]))
@@ -409,11 +416,42 @@ def test_python_takes_every_option_of_the_commands():
             if target is None:
                 continue
             kw = SPELT.get(option, option.replace("-", "_"))
-            assert kw in keywords(target), f"{command} --{option}: no keyword {kw}"
+            # a parameter of the model is a keyword of every function (its **kwargs)
+            assert kw in keywords(target) or (kw in PARAMETERS and "**kwargs" in signature(target)), \
+                f"{command} --{option}: no keyword {kw}"
     # relax_yarns takes what `relax --from` takes
-    for option in ("scale", "shrink", "max-time", "time-step", "integrator", "k-global",
-                   "check-every", "threads", "export"):
+    for option in ("scale", "shrink", "max-time", "check-every", "threads", "export"):
         assert option.replace("-", "_") in keywords(knitsim.relax_yarns), option
+    for option in ("time-step", "integrator", "k-global"):  # parameters
+        assert option.replace("-", "_") in PARAMETERS
+        assert "**kwargs" in signature(knitsim.relax_yarns)
+
+
+def test_every_parameter_is_a_keyword():
+    # the parameter table, as Python reads it: each parameter, its group, unit and range
+    table = knitsim.parameters()
+    names = {p["name"] for p in table}
+    assert {"radius", "k_bend", "time_step", "integrator", "refuse_crossings"} <= names
+    for p in table:
+        assert p["group"] in ("material", "discretisation", "solver"), p
+        if "min" in p:
+            assert p["min"] <= p["default"] <= p["max"], p
+    integrator = next(p for p in table if p["name"] == "integrator")
+    assert integrator["default"] in integrator["choices"]
+    # any parameter is a keyword of relax, relax_yarns and stretch (not only those the
+    # commands' options name): k_bend here, which no option of relax sets
+    k = knitsim.relax("stockinette", rows=3, cols=3, max_time=0.001, k_bend=4.0)
+    assert k.summary["params"]["material"]["k_bend"] == 4.0
+    # a parameter's range is checked as in `params`, and a keyword that is neither an
+    # argument nor a parameter is named
+    with pytest.raises(ValueError, match="k_bend"):
+        knitsim.relax("stockinette", rows=3, cols=3, max_time=0.001, k_bend=-1.0)
+    with pytest.raises(TypeError, match="k_bent"):
+        knitsim.relax("stockinette", rows=3, cols=3, max_time=0.001, k_bent=4.0)
+    # a scene's run changes the solver's parameters only: the model is built
+    scene = knitsim.load_scene(str(EXAMPLES / "pendulum.json"))
+    with pytest.raises(ValueError, match="radius is a material parameter"):
+        scene.run(duration=0.001, radius=0.2)
 
 
 def same_run(summary, other):
