@@ -216,16 +216,6 @@ void require_path(const std::string& path, const char* kw) {
     throw FileNotFound(std::string(kw) + ": " + path + ": no such file or directory");
 }
 
-Integrator integrator_arg(const std::string& name) {
-  try {
-    return parse_integrator(name);
-  } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument(std::string("integrator: ") + e.what());
-  }
-}
-
-// The solver options that simulate, relax and stretch share (docs/cli.md, "Solver
-// options"); each unset one leaves the parameters as they are.
 // The model's parameters given as keywords — any name of the parameter table
 // (src/knit/model/params.def, docs/parameters.md, knitsim.parameters()), as `params` takes
 // them — laid over the `params` dict (a keyword wins): one dict for params_over. A keyword
@@ -712,6 +702,19 @@ PYBIND11_MODULE(knitsim, m) {
       "; `export`: also export the result there, as `knitsim relax --export` does). "
       "`check_crossings`: check every step for yarns that passed through each other (the "
       "summary's `crossings`, as --check-crossings). Returns a Knit.";
+  m.def(
+      "sweep",
+      [](py::args args, py::kwargs kwargs) {
+        return py::module_::import("knitsim_sweep").attr("sweep")(*args, **kwargs);
+      },
+      "sweep(spec, out, scheduler=None, workers=None, threads=1, progress=False) -> "
+      "pandas.DataFrame\n\nRuns a sweep spec's jobs (a JSON path or a dict: relax, stretch "
+      "and simulate jobs over a grid or a list of arguments) on a Dask cluster into `out`, "
+      "each job its own run directory, and returns their table (also OUT/results.csv); a "
+      "restarted sweep runs only what is not done. `scheduler`: a running scheduler's address "
+      "(default: a local cluster of `workers` processes, all cores). The module knitsim_sweep "
+      "(python3-distributed, python3-pandas, python3-tqdm); docs/sweeps.md.");
+
   m.def(
       "parameters",
       [] {

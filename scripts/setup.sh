@@ -12,6 +12,7 @@ packages=(
   libopenvdb-dev libboost-iostreams-dev
   ffmpeg gnuplot-nox clang-format
   python3-dev python3-numpy pybind11-dev libjs-three libfreetype-dev fonts-dejavu-core
+  python3-distributed python3-pandas python3-tqdm
 )
 bash scripts/apt-install.sh --why setup "${packages[@]}"
 [ "${1:-}" != --install-only ] || exit 0
@@ -28,14 +29,16 @@ if ! cmake --build "$build_dir" -j "$jobs" >"$build_dir/build.log" 2>&1; then
   exit 1
 fi
 
-# the Python module, for Debian's python3 (`import knitsim` from anywhere): copied into its
-# site-packages folder for local modules; PYTHONPATH=build/python works without it
+# the Python module and its sweep layer (python3-distributed), for Debian's python3
+# (`import knitsim` from anywhere): copied into its site-packages folder for local modules;
+# PYTHONPATH=build/python works without it
 module=$(ls "$build_dir"/python/knitsim*.so 2>/dev/null | head -n 1 || true)
 if [ -n "$module" ]; then
   site=$(/usr/bin/python3 -c 'import sysconfig; print(sysconfig.get_path("platlib"))')
   sudo_cmd=()
   [ "$(id -u)" -eq 0 ] || sudo_cmd=(sudo)
-  if ! { "${sudo_cmd[@]}" mkdir -p "$site" && "${sudo_cmd[@]}" install -m 644 "$module" "$site/"; }; then
+  if ! { "${sudo_cmd[@]}" mkdir -p "$site" &&
+    "${sudo_cmd[@]}" install -m 644 "$module" "$build_dir/python/knitsim_sweep.py" "$site/"; }; then
     echo "setup: could not install the Python module into $site;" \
       "use PYTHONPATH=$build_dir/python" >&2
   fi
