@@ -10,8 +10,8 @@
 #   scripts/knitout_programs.sh [OUT] [MAX_TIME] [REST_STITCHES]
 #                                  (default out/knitout, 0.05 s, 0: none to rest)
 #
-# Takes about 8 minutes on 2 cores (the three 80 × 123 basic-vol sheets are most of it),
-# 13.5 with REST_STITCHES 1300 (three FIRE runs of 5 s).
+# Takes about 9 minutes on 2 cores (the three 80 × 123 basic-vol sheets are most of it),
+# about 25 with REST_STITCHES 1300 (five FIRE runs of 5 s).
 # Needs build/knitsim.
 set -euo pipefail
 cd "$(dirname "$0")/.."
