@@ -17,8 +17,10 @@ keywords only relax() takes (max_time, shrink, …) and those in "relax", as `kn
 PATTERN` does), and Scene.run (simulate: "scene"
 and "knit" name the files load_scene reads). Paths are relative to the spec's folder.
 
-Each job writes its own run directory, OUT/jobs/ID/run (stretch: OUT/jobs/ID/relax too),
-and, once finished, OUT/jobs/ID/result.json: its row of the sweep's table. A restarted
+Each job writes its own run directory, OUT/jobs/ID/run, and, once finished,
+OUT/jobs/ID/result.json: its row of the sweep's table. The stretch jobs of one knit (the
+same pattern and relaxation arguments, different directions or speeds) share one
+relaxation, OUT/relaxed/HASH, run once before them. A restarted
 sweep runs only the jobs without a result. The rows are gathered into OUT/results.csv (and
 a pandas DataFrame). A job that fails is reported in its row (status "error" and the
 message) and does not stop the others; it runs again when the sweep is restarted. A
@@ -147,8 +149,29 @@ def expand(spec):
         if job_id in seen:
             continue  # the same job listed twice runs once
         seen.add(job_id)
-        jobs.append({"id": job_id, "kind": job_kind, "args": args, "vary": vary})
+        job = {"id": job_id, "kind": job_kind, "args": args, "vary": vary}
+        if job_kind == "stretch" and "from" not in args:
+            _split_relaxation(job)
+        jobs.append(job)
     return jobs
+
+
+def _split_relaxation(job):
+    """A stretch job from a pattern: its relaxation's arguments (the knit's own, those
+    relax() takes and stretch() does not, and "relax") go to job["relax"], named by a hash
+    of them, so that the stretch jobs of one knit share one relaxation."""
+    import knitsim
+
+    args = dict(job["args"])
+    relax_args = dict(args.pop("relax", {}))
+    only_relax = _keywords(knitsim.relax) - _keywords(knitsim.stretch)
+    for key in list(args):
+        if key in RELAX_KEYS_OF_STRETCH or key in only_relax:
+            relax_args[key] = args.pop(key)
+    canonical = json.dumps(relax_args, sort_keys=True)
+    job["args"] = args
+    job["relax"] = {"id": hashlib.sha256(canonical.encode()).hexdigest()[:12],
+                    "args": relax_args}
 
 
 def _job_dir(out, job):
@@ -164,9 +187,40 @@ def _summary_row(summary, prefix=""):
     return row
 
 
-def run_job(job, out, threads=1):
+def run_relaxation(relax, out, threads=1):
+    """The relaxation stretch jobs of one knit share: into OUT/relaxed/ID/run, its outcome
+    (the relaxed state's path, its row's relax_ columns, or the error) written to
+    OUT/relaxed/ID/result.json when it finished. A relaxation already finished returns its
+    recorded outcome. Runs in a Dask worker, or here."""
+    import knitsim
+
+    d = os.path.join(out, "relaxed", relax["id"])
+    done = os.path.join(d, RESULT)
+    if os.path.exists(done):
+        with open(done, encoding="utf-8") as f:
+            return json.load(f)
+    os.makedirs(d, exist_ok=True)
+    run_dir = os.path.join(d, "run")
+    outcome = {"kstate": os.path.join(run_dir, "final.kstate"), "row": {}, "error": None}
+    try:
+        if "pattern" not in relax["args"]:
+            raise ValueError("a stretch job needs 'from' (a .kstate) or 'pattern'")
+        k = knitsim.relax(**relax["args"], out=run_dir, overwrite=True, threads=threads,
+                          frames=False)
+        outcome["row"] = _summary_row(k.summary, "relax_")
+        if k.status != "ok":
+            outcome["error"] = f"the relaxation ended {k.status}: {k.summary.get('message', '')}"
+    except Exception as e:
+        outcome["error"] = f"the relaxation failed: {type(e).__name__}: {e}"
+        return outcome  # (not recorded: a restart tries it again)
+    _write_atomic(done, json.dumps(outcome, indent=1))
+    return outcome
+
+
+def run_job(job, out, threads=1, relaxed=None):
     """Runs one job into OUT/jobs/ID and returns its row (written to its result.json).
-    A job already finished returns its recorded row. Runs in a Dask worker, or here."""
+    A job already finished returns its recorded row. A stretch job from a pattern takes its
+    relaxation's outcome (run_relaxation), or runs it. Runs in a Dask worker, or here."""
     import knitsim
 
     d = _job_dir(out, job)
@@ -185,25 +239,13 @@ def run_job(job, out, threads=1):
             row.update(_summary_row(k.summary))
         elif job["kind"] == "stretch":
             kstate = args.pop("from", None)
-            relax_args = dict(args.pop("relax", {}))
-            # the knit's own arguments, and those relax() takes but stretch() does not
-            # (max_time, shrink, …), are the relaxation's
-            only_relax = _keywords(knitsim.relax) - _keywords(knitsim.stretch)
-            for key in list(args):
-                if key in RELAX_KEYS_OF_STRETCH or key in only_relax:
-                    relax_args[key] = args.pop(key)
-            if kstate is None:
-                if "pattern" not in relax_args:
-                    raise ValueError("a stretch job needs 'from' (a .kstate) or 'pattern'")
-                relax_dir = os.path.join(d, "relax")
-                k = knitsim.relax(**relax_args, out=relax_dir, overwrite=True, threads=threads,
-                                  frames=False)
-                row.update(_summary_row(k.summary, "relax_"))
-                if k.status != "ok":
-                    raise RuntimeError(f"the relaxation ended {k.status}")
-                kstate = os.path.join(relax_dir, "final.kstate")
-            elif relax_args:
-                raise ValueError(f"{sorted(relax_args)}: for a stretch from a pattern, not 'from'")
+            if "relax" in job:  # from a pattern, relaxed first
+                if relaxed is None:
+                    relaxed = run_relaxation(job["relax"], out, threads)
+                row.update(relaxed["row"])
+                if relaxed["error"]:
+                    raise RuntimeError(relaxed["error"])
+                kstate = relaxed["kstate"]
             r = knitsim.stretch(kstate, **args, out=run_dir, overwrite=True, threads=threads)
             row.update(_summary_row({**r["summary"], "status": r["status"], "steps": r["steps"]}))
             curve = r["curve"]
@@ -375,8 +417,16 @@ def _run_on_cluster(jobs, out, scheduler, workers, threads, progress):
         client = Client(local.address)
         client.wait_for_workers(n, timeout=120)
     try:
-        futures = {client.submit(run_job, j, out, threads, key=f"knitsim-job-{j['id']}",
-                                 pure=False): j["id"] for j in jobs}
+        # the relaxations the stretch jobs share first, each once; a stretch job waits for its
+        relaxations = {}
+        for j in jobs:
+            if "relax" in j and j["relax"]["id"] not in relaxations:
+                relaxations[j["relax"]["id"]] = client.submit(
+                    run_relaxation, j["relax"], out, threads,
+                    key=f"knitsim-relax-{j['relax']['id']}", pure=False)
+        futures = {client.submit(run_job, j, out, threads,
+                                 relaxations[j["relax"]["id"]] if "relax" in j else None,
+                                 key=f"knitsim-job-{j['id']}", pure=False): j["id"] for j in jobs}
         bar = None
         if progress:
             from tqdm import tqdm

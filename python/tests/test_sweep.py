@@ -128,6 +128,25 @@ def test_mistakes_are_refused_or_reported_in_their_job(tmp_path):
     assert sorted(os.listdir(theirs)) == ["notes.txt"]
 
 
+def test_the_stretch_jobs_of_one_knit_share_its_relaxation(tmp_path):
+    spec = {"kind": "stretch", "args": {"pattern": "stockinette", "rows": 6, "cols": 6,
+                                        "max_time": 0.002, "to": 0.01, "render": False},
+            "grid": {"direction": ["course", "wale"]}}
+    out = str(tmp_path / "s")
+    table = knitsim.sweep(spec, out, workers=2)
+    assert (table["status"] == "ok").all()
+    assert len(os.listdir(os.path.join(out, "relaxed"))) == 1  # relaxed once
+    assert table["relax_course_extent_cm"].nunique() == 1
+    # each pull is the pull of that relaxed state, run on its own
+    jobs = knitsim_sweep.expand(spec)
+    relaxed = os.path.join(out, "relaxed", jobs[0]["relax"]["id"], "run", "final.kstate")
+    for job in jobs:
+        r = knitsim.stretch(relaxed, **job["args"])
+        row = table[table["id"] == job["id"]].iloc[0]
+        assert row["max_force_dyn"] == max(r["curve"]["force_moving"])
+        assert row["steps"] == r["steps"]
+
+
 def test_the_command_runs_a_spec_file(tmp_path):
     spec = tmp_path / "spec.json"
     spec.write_text(json.dumps({**SIX, "grid": {"pattern": ["stockinette", "garter"]}}))
