@@ -23,19 +23,7 @@ using contact_detail::Clock;
 using contact_detail::has_damping;
 using contact_detail::seconds_since;
 
-namespace {
-
-using lanes::any;
-using lanes::lane_bits;
-using lanes::lane_sum;
 using lanes::LANES;
-using lanes::load;
-using lanes::splat;
-using lanes::store;
-using lanes::VecD;
-using lanes::VecL;
-
-}  // namespace
 
 ContactTerm::ContactTerm(const Model& model, ContactCulling culling)
     : m_culling(culling), m_margin(DEFAULT_MARGIN_RADII * model.params.material.radius) {
