@@ -34,12 +34,10 @@ or the running scheduler at `scheduler` ("tcp://host:8786", started with `dask s
 and `dask worker` on each machine: docs/sweeps.md), where every worker must import the
 same knitsim and read the same paths.
 
-    knitsim sweep SPEC --out OUT [--workers N] [--scheduler ADDRESS]
-    python3 -m knitsim_sweep SPEC --out OUT ...
+    knitsim sweep SPEC --out OUT [--workers N] [--scheduler ADDRESS]   (run_command)
     knitsim.sweep(spec, "OUT")  ->  pandas.DataFrame
 """
 
-import argparse
 import hashlib
 import itertools
 import json
@@ -445,36 +443,20 @@ def _run_on_cluster(jobs, out, scheduler, workers, threads, progress):
             local.close()
 
 
-def main(argv=None):
-    p = argparse.ArgumentParser(
-        prog="knitsim sweep",
-        description="run a sweep spec's jobs on a Dask cluster (docs/sweeps.md)")
-    p.add_argument("spec", help="the sweep spec (JSON)")
-    p.add_argument("--out", required=True, help="the sweep's directory (new, empty or an "
-                   "earlier sweep's, which it goes on with)")
-    p.add_argument("--workers", type=int, default=None,
-                   help="local cluster: worker processes (default: all cores)")
-    p.add_argument("--scheduler", default=None,
-                   help="a running Dask scheduler's address (tcp://HOST:8786) instead")
-    p.add_argument("--threads", type=int, default=1, help="threads per job (default 1)")
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
-    a = p.parse_args(argv)
-    if a.workers is not None and a.workers < 1:
-        p.error("--workers must be at least 1")
-    if a.threads < 0:
-        p.error("--threads must be >= 0 (0: all cores)")
+def run_command(options):
+    """`knitsim sweep` (apps/knitsim/cmd_sweep.cpp, which declares and checks the options and
+    passes them here as JSON): runs the sweep, prints the count and the failed jobs, and
+    returns the exit code (0; 1 when a job failed or the spec was refused)."""
+    o = json.loads(options)
     try:
-        table = sweep(a.spec, a.out, scheduler=a.scheduler, workers=a.workers,
-                      threads=a.threads, progress=not a.quiet)
+        table = sweep(o["spec"], o["out"], scheduler=o["scheduler"] or None,
+                      workers=o["workers"] or None, threads=o["threads"],
+                      progress=o["progress"])
     except (SpecError, FileNotFoundError) as e:
-        print(f"knitsim sweep: error: {e}", file=sys.stderr)
+        print(f"knitsim: error: sweep: {e}", file=sys.stderr)
         return 1
     errors = table[table["status"] == "error"] if "status" in table else table.iloc[0:0]
-    print(f"{len(table)} jobs, {len(errors)} failed; table: {os.path.join(a.out, 'results.csv')}")
+    print(f"{len(table)} jobs, {len(errors)} failed; table: {os.path.join(o['out'], 'results.csv')}")
     for _, r in errors.iterrows():
         print(f"  {r['id']}: {r.get('error', '')}", file=sys.stderr)
     return 1 if len(errors) else 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())
