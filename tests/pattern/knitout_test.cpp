@@ -278,13 +278,14 @@ TEST(Knitout, WhatCannotBeKnitYetIsRefusedWithItsLine) {
   EXPECT_EQ(refusal(head + "x-stitch-number 5\npause\nstitch 30 40\nmiss - f3 3\n"), "(accepted)");
 }
 
-// The textiles-lab programs (tests/data/knitout) whose graph is a rectangle of one yarn —
-// ten of the 24 — read as sheets: every loop but the cast-on's a stitch of the chart, the
-// purls their transfers make where the program's name says; each is laid as yarn with the
-// yarns apart, and the smaller ones' first steps of relaxation pass no yarn through
-// another. The others are refused naming a line of the program (what they need is the
-// graph's own layout).
-TEST(Knitout, TheTextilesLabProgramsOfOneYarnReadAsSheets) {
+// The textiles-lab programs (tests/data/knitout) whose graph is a rectangle of whole rows,
+// each knit by one yarn — fourteen of the 24 (one of them striped, two carriers) — read as
+// sheets: every loop but the cast-on's a stitch of the chart, the purls their transfers
+// make where the program's name says, the rib and seed patterns as their names say; each is
+// laid as yarn with the yarns apart, and the smaller ones' first steps of relaxation pass
+// no yarn through another. The others are refused naming a line of the program (what they
+// need is the graph's own layout).
+TEST(Knitout, TheTextilesLabProgramsOfWholeRowsReadAsSheets) {
   const std::string dir = std::string(KNIT_TEST_DATA) + "/knitout/";
   const std::set<std::string> sheets = {"Tutorial1_helloworld.k",
                                         "Tutorial3_garter.k",
