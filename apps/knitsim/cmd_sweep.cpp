@@ -44,9 +44,9 @@ std::string build_python_dir() {
     const std::string path = dir + (old && *old ? ":" + std::string(old) : "");
     ::setenv("PYTHONPATH", path.c_str(), 1);
   }
-  const nlohmann::json options = {{"spec", o.spec},       {"out", o.out},
+  const nlohmann::json options = {{"spec", o.spec},           {"out", o.out},
                                   {"scheduler", o.scheduler}, {"workers", o.workers},
-                                  {"threads", o.threads}, {"progress", !o.quiet}};
+                                  {"threads", o.threads},     {"progress", !o.quiet}};
   const char* python = ::access("/usr/bin/python3", X_OK) == 0 ? "/usr/bin/python3" : "python3";
   std::vector<std::string> argv = {
       python, "-c", "import sys, knitsim_sweep; sys.exit(knitsim_sweep.run_command(sys.argv[1]))",
