@@ -369,9 +369,10 @@ class _LocalCluster:
     """A scheduler in this process and `n` workers as `dask worker` processes (each a nanny
     that starts a new worker when its worker dies), on this machine's loopback. Workers run
     in fresh interpreters: a user's script that calls sweep() is not imported again by them
-    (as multiprocessing's spawn would), so it needs no `if __name__ == "__main__"` guard."""
+    (as multiprocessing's spawn would), so it needs no `if __name__ == "__main__"` guard.
+    Their scratch space is `scratch` (OUT/.dask), not the system's temporary folder."""
 
-    def __init__(self, n):
+    def __init__(self, n, scratch):
         import logging
         import subprocess
 
@@ -384,7 +385,7 @@ class _LocalCluster:
         self.workers = [subprocess.Popen(
             [sys.executable, "-m", "distributed.cli.dask_worker", self.address,
              "--nworkers", "1", "--nthreads", "1", "--no-dashboard", "--host", "127.0.0.1",
-             "--name", f"knitsim-sweep-{k}"],
+             "--name", f"knitsim-sweep-{k}", "--local-directory", scratch],
             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL) for k in range(n)]
 
     def close(self):
@@ -411,7 +412,7 @@ def _run_on_cluster(jobs, out, scheduler, workers, threads, progress):
         client = Client(scheduler)
     else:
         n = workers or os.cpu_count() or 1
-        local = _LocalCluster(n)
+        local = _LocalCluster(n, os.path.join(out, ".dask"))
         client = Client(local.address)
         client.wait_for_workers(n, timeout=120)
     try:
