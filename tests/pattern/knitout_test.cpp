@@ -417,9 +417,19 @@ TEST(Knitout, StripesKeepTheirYarnsWhereTheyWereKnit) {
   ASSERT_EQ(g.num_yarns(), 2);
   EXPECT_GT(g.min_distance_ratio, 0.85);
   // every stitch's segments are its row's yarn's
+  std::vector<int> yarn_of(g.num_segments());
   for (int i = 0, y = 0, end = g.yarn_segments[0]; i < g.num_segments(); ++i) {
     if (i == end) end += g.yarn_segments[++y];
+    yarn_of[i] = y;
     if (g.piece[i] == YarnPiece::STITCH) ASSERT_EQ(y, yarns[g.stitch[i].row]) << "segment " << i;
+  }
+  // each yarn's two free ends are glued to that yarn, against the fabric
+  ASSERT_EQ(g.glues.size(), 4u);
+  for (size_t k = 0; k < g.glues.size(); ++k) {
+    EXPECT_EQ(yarn_of[g.glues[k].a.segment], static_cast<int>(k / 2)) << "glue " << k;
+    EXPECT_EQ(yarn_of[g.glues[k].b.segment], static_cast<int>(k / 2)) << "glue " << k;
+    EXPECT_LT(g.glue_gap_cm[k], 6 * 0.125) << "glue " << k;
+    EXPECT_NEAR((g.point(g.glues[k].a) - g.point(g.glues[k].b)).norm(), g.glue_gap_cm[k], 1e-12);
   }
 
   auto relax = [&](const std::string& path) {
