@@ -107,7 +107,10 @@ def expand(spec):
     """The spec's jobs, in order: each a dict with its id (a label of what varies and a hash
     of the kind and arguments, so that the same job has the same id in every sweep), kind,
     arguments and the values that vary. Raises SpecError naming what is wrong."""
-    data, base, name = load_spec(spec)
+    return _expand(*load_spec(spec))
+
+
+def _expand(data, base, name):
     if not isinstance(data, dict):
         raise SpecError(f"{name}: a sweep spec is a JSON object")
     unknown = set(data) - {"kind", "args", "grid", "jobs", "name"}
@@ -294,8 +297,8 @@ def sweep(spec, out, scheduler=None, workers=None, threads=1, progress=False):
     `workers` processes, default all cores); `threads`: each job's threads (default 1)."""
     import pandas as pd
 
-    jobs = expand(spec)
-    data, _, _ = load_spec(spec)
+    data, base, name = load_spec(spec)
+    jobs = _expand(data, base, name)
     out = os.path.abspath(os.fspath(out))
     _prepare(out, jobs, data)
     rows = {}

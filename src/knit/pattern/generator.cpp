@@ -774,9 +774,6 @@ GeneratedKnit lay_knit(const Pattern& pattern_in, const KnitOptions& opt) {
     separate_close_pairs(out.control_points, opt.radius, SEPARATION_TARGET, CONTACT_POINTS,
                          out.yarn_segments);
   const std::vector<int> first_cp = first_control_points(out.yarn_segments);
-  auto point_at = [&](const YarnPoint& p) -> Eigen::Vector3d {
-    return out.control_points.middleCols<4>(first_cp[p.segment]) * bspline_basis(p.t);
-  };
 
   // glue each free end to the closest point of its yarn outside its own tail and the stitch
   // it enters
@@ -807,7 +804,8 @@ GeneratedKnit lay_knit(const Pattern& pattern_in, const KnitOptions& opt) {
       for (const Glue& g :
            edge_ties(out.control_points, first_cp, out.stitch, out.piece, {1, col}, {0, col}))
         out.glues.push_back(g);
-  for (const Glue& g : out.glues) out.glue_gap_cm.push_back((point_at(g.a) - point_at(g.b)).norm());
+  for (const Glue& g : out.glues)
+    out.glue_gap_cm.push_back((out.point(g.a) - out.point(g.b)).norm());
 
   // centre: a flat piece on the origin, a tube on its axis (y centred)
   Eigen::Vector3d centre =
